@@ -1,0 +1,189 @@
+// SPDX-License-Identifier: MIT
+#include "autodiff/elementwise.h"
+
+#include <stdexcept>
+#include <string>
+
+namespace nfield::autodiff {
+namespace {
+
+template <typename Scalar>
+using Column = Eigen::Array<Scalar, Eigen::Dynamic, 1>;
+
+void require_tables(size_t have, int need, const char* pass) {
+  if (static_cast<int>(have) < need)
+    throw std::logic_error(std::string(pass) + ": " + std::to_string(have) +
+                           " derivative tables given, the streams need " + std::to_string(need));
+}
+
+// Powers P[m][k] = (δᵐ)_k of one column's Taylor series, m = 1..K, k = m..K.
+template <typename Scalar>
+class TaylorPowers {
+ public:
+  TaylorPowers(int order, Eigen::Index n) : order_(order), powers_((order + 1) * (order + 1)) {
+    for (auto& p : powers_) p.resize(n);
+  }
+  Column<Scalar>& at(int m, int k) { return powers_[m * (order_ + 1) + k]; }
+
+  // delta[k] = δ_k for k = 1..K (delta[0] unused).
+  void compute(const std::vector<Column<Scalar>>& delta) {
+    for (int k = 1; k <= order_; ++k) at(1, k) = delta[k];
+    for (int m = 2; m <= order_; ++m)
+      for (int k = m; k <= order_; ++k) {
+        Column<Scalar>& p = at(m, k);
+        p = delta[1] * at(m - 1, k - 1);
+        for (int j = 2; j <= k - m + 1; ++j) p += delta[j] * at(m - 1, k - j);
+      }
+  }
+
+ private:
+  int order_;
+  std::vector<Column<Scalar>> powers_;
+};
+
+template <typename Scalar>
+std::vector<Scalar> inverse_factorials(int n) {
+  std::vector<Scalar> f(n + 1, Scalar(1));
+  double value = 1;
+  for (int m = 1; m <= n; ++m) f[m] = static_cast<Scalar>(1.0 / (value *= m));
+  return f;
+}
+
+}  // namespace
+
+template <typename Scalar>
+void elementwise_forward(const StreamLayout& layout, const std::vector<Matrix<Scalar>>& tables,
+                         const Streams<Scalar>& z, Streams<Scalar>& y) {
+  require_tables(tables.size(), layout.forward_order() + 1, "elementwise_forward");
+  const Eigen::Index n = z.points, width = z.width();
+  y.resize(n, z.count, width);
+  y.stream(0) = tables[0];
+  if (layout.count() == 1) return;
+  const auto d1 = tables[1].array();
+  for (int i = 0; i < layout.tangents(); ++i)
+    y.stream(layout.tangent(i)).array() = d1 * z.stream(layout.tangent(i)).array();
+  if (layout.operators() > 0) {
+    const auto d2 = tables[2].array();
+    Matrix<Scalar> quadratic(n, width);
+    for (int q = 0; q < layout.operators(); ++q) {
+      auto yq = y.stream(layout.op(q)).array();
+      yq = d1 * z.stream(layout.op(q)).array();
+      const auto& terms = layout.terms(q);
+      if (terms.empty()) continue;
+      auto acc = quadratic.array();
+      acc = Scalar(terms[0].coefficient) * z.stream(layout.tangent(terms[0].i)).array() *
+            z.stream(layout.tangent(terms[0].j)).array();
+      for (size_t t = 1; t < terms.size(); ++t)
+        acc += Scalar(terms[t].coefficient) * z.stream(layout.tangent(terms[t].i)).array() *
+               z.stream(layout.tangent(terms[t].j)).array();
+      yq += d2 * acc;
+    }
+  }
+  const int order = layout.taylor_order();
+  if (layout.taylor_dirs() == 0) return;
+  const std::vector<Scalar> inv_fact = inverse_factorials<Scalar>(order);
+  TaylorPowers<Scalar> powers(order, n);
+  std::vector<Column<Scalar>> delta(order + 1);
+  for (int p = 0; p < layout.taylor_dirs(); ++p)
+    for (Eigen::Index c = 0; c < width; ++c) {
+      for (int k = 1; k <= order; ++k) delta[k] = z.stream(layout.taylor(p, k)).col(c).array();
+      powers.compute(delta);
+      for (int k = 1; k <= order; ++k) {
+        auto yk = y.stream(layout.taylor(p, k)).col(c).array();
+        yk = tables[1].col(c).array() * powers.at(1, k);
+        for (int m = 2; m <= k; ++m) yk += (inv_fact[m] * tables[m].col(c).array()) * powers.at(m, k);
+      }
+    }
+}
+
+template <typename Scalar>
+void elementwise_backward(const StreamLayout& layout, const std::vector<Matrix<Scalar>>& tables,
+                          const Streams<Scalar>& z, const Streams<Scalar>& y_adjoint,
+                          Streams<Scalar>& z_adjoint) {
+  require_tables(tables.size(), layout.forward_order() + 2, "elementwise_backward");
+  const Eigen::Index n = z.points, width = z.width();
+  z_adjoint.resize(n, z.count, width);
+  const auto d1 = tables[1].array();
+  auto z0_bar = z_adjoint.stream(0).array();
+  z0_bar = d1 * y_adjoint.stream(0).array();
+  if (layout.count() == 1) return;
+  const auto d2 = tables[2].array();
+  for (int i = 0; i < layout.tangents(); ++i) {
+    const auto yi_bar = y_adjoint.stream(layout.tangent(i)).array();
+    z_adjoint.stream(layout.tangent(i)).array() = d1 * yi_bar;
+    z0_bar += d2 * yi_bar * z.stream(layout.tangent(i)).array();
+  }
+  if (layout.operators() > 0) {
+    const auto d3 = tables[3].array();
+    Matrix<Scalar> scratch(n, width);
+    for (int q = 0; q < layout.operators(); ++q) {
+      const auto yq_bar = y_adjoint.stream(layout.op(q)).array();
+      z_adjoint.stream(layout.op(q)).array() = d1 * yq_bar;
+      z0_bar += d2 * yq_bar * z.stream(layout.op(q)).array();
+      const auto& terms = layout.terms(q);
+      if (terms.empty()) continue;
+      auto acc = scratch.array();
+      acc = Scalar(terms[0].coefficient) * z.stream(layout.tangent(terms[0].i)).array() *
+            z.stream(layout.tangent(terms[0].j)).array();
+      for (size_t t = 1; t < terms.size(); ++t)
+        acc += Scalar(terms[t].coefficient) * z.stream(layout.tangent(terms[t].i)).array() *
+               z.stream(layout.tangent(terms[t].j)).array();
+      z0_bar += d3 * yq_bar * acc;
+      acc = d2 * yq_bar;  // g = σ'' ȳ^[C], reused by every term
+      for (const OperatorTerm& term : terms) {
+        const Scalar c = Scalar(term.coefficient);
+        if (term.i == term.j) {
+          z_adjoint.stream(layout.tangent(term.i)).array() +=
+              (Scalar(2) * c) * acc * z.stream(layout.tangent(term.i)).array();
+        } else {
+          z_adjoint.stream(layout.tangent(term.i)).array() +=
+              c * acc * z.stream(layout.tangent(term.j)).array();
+          z_adjoint.stream(layout.tangent(term.j)).array() +=
+              c * acc * z.stream(layout.tangent(term.i)).array();
+        }
+      }
+    }
+  }
+  const int order = layout.taylor_order();
+  if (layout.taylor_dirs() == 0) return;
+  const std::vector<Scalar> inv_fact = inverse_factorials<Scalar>(order);
+  TaylorPowers<Scalar> powers(order, n), power_bars(order, n);
+  std::vector<Column<Scalar>> delta(order + 1), delta_bar(order + 1);
+  for (int p = 0; p < layout.taylor_dirs(); ++p)
+    for (Eigen::Index c = 0; c < width; ++c) {
+      for (int k = 1; k <= order; ++k) {
+        delta[k] = z.stream(layout.taylor(p, k)).col(c).array();
+        delta_bar[k].setZero(n);
+      }
+      powers.compute(delta);
+      auto z0c_bar = z_adjoint.stream(0).col(c).array();
+      for (int m = 1; m <= order; ++m)
+        for (int k = m; k <= order; ++k) {
+          const auto yk_bar = y_adjoint.stream(layout.taylor(p, k)).col(c).array();
+          z0c_bar += (inv_fact[m] * tables[m + 1].col(c).array()) * yk_bar * powers.at(m, k);
+          power_bars.at(m, k) = (inv_fact[m] * tables[m].col(c).array()) * yk_bar;
+        }
+      for (int m = order; m >= 2; --m)
+        for (int k = m; k <= order; ++k)
+          for (int j = 1; j <= k - m + 1; ++j) {
+            delta_bar[j] += power_bars.at(m, k) * powers.at(m - 1, k - j);
+            power_bars.at(m - 1, k - j) += power_bars.at(m, k) * delta[j];
+          }
+      for (int k = 1; k <= order; ++k)
+        z_adjoint.stream(layout.taylor(p, k)).col(c).array() = delta_bar[k] + power_bars.at(1, k);
+    }
+}
+
+#define NFIELD_INSTANTIATE(Scalar)                                                           \
+  template void elementwise_forward<Scalar>(const StreamLayout&,                             \
+                                            const std::vector<Matrix<Scalar>>&,              \
+                                            const Streams<Scalar>&, Streams<Scalar>&);       \
+  template void elementwise_backward<Scalar>(const StreamLayout&,                            \
+                                             const std::vector<Matrix<Scalar>>&,             \
+                                             const Streams<Scalar>&, const Streams<Scalar>&, \
+                                             Streams<Scalar>&);
+NFIELD_INSTANTIATE(float)
+NFIELD_INSTANTIATE(double)
+#undef NFIELD_INSTANTIATE
+
+}  // namespace nfield::autodiff

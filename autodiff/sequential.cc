@@ -1,0 +1,152 @@
+// SPDX-License-Identifier: MIT
+#include "autodiff/sequential.h"
+
+#include <omp.h>
+
+#include <stdexcept>
+#include <string>
+
+namespace nfield::autodiff {
+
+template <typename Scalar>
+struct Sequential<Scalar>::Workspace {
+  std::vector<Streams<Scalar>> activations;  // input of module l, then the output
+  std::vector<SavedTensors<Scalar>> saved;
+  Streams<Scalar> adjoint, next_adjoint;
+  Vector<Scalar> gradient;
+  double loss = 0;
+};
+
+template <typename Scalar>
+Sequential<Scalar>::Sequential(SequentialOptions options) {
+  set_options(options);
+}
+template <typename Scalar>
+Sequential<Scalar>::Sequential(Sequential&&) noexcept = default;
+template <typename Scalar>
+Sequential<Scalar>& Sequential<Scalar>::operator=(Sequential&&) noexcept = default;
+template <typename Scalar>
+Sequential<Scalar>::~Sequential() = default;
+
+template <typename Scalar>
+void Sequential<Scalar>::set_options(const SequentialOptions& options) {
+  if (options.block_points < 1)
+    throw std::invalid_argument("SequentialOptions.block_points = " +
+                                std::to_string(options.block_points) + ": must be >= 1");
+  if (options.threads < 0)
+    throw std::invalid_argument("SequentialOptions.threads = " + std::to_string(options.threads) +
+                                ": must be >= 0 (0 = all)");
+  options_ = options;
+}
+
+template <typename Scalar>
+void Sequential<Scalar>::add(std::unique_ptr<Module<Scalar>> module) {
+  if (!modules_.empty() && module->input_width() != output_width())
+    throw std::invalid_argument("Sequential::add: module '" + module->name() + "' takes width " +
+                                std::to_string(module->input_width()) + ", previous output is " +
+                                std::to_string(output_width()));
+  offsets_.push_back(parameter_count_);
+  parameter_count_ += module->parameter_count();
+  modules_.push_back(std::move(module));
+  workspaces_.clear();
+}
+
+template <typename Scalar>
+Eigen::Index Sequential<Scalar>::input_width() const {
+  return modules_.empty() ? 0 : modules_.front()->input_width();
+}
+template <typename Scalar>
+Eigen::Index Sequential<Scalar>::output_width() const {
+  return modules_.empty() ? 0 : modules_.back()->output_width();
+}
+
+template <typename Scalar>
+typename Sequential<Scalar>::Workspace& Sequential<Scalar>::workspace(int thread) const {
+  return *workspaces_[thread];
+}
+
+namespace {
+int thread_count(int requested) { return requested > 0 ? requested : omp_get_max_threads(); }
+}  // namespace
+
+template <typename Scalar>
+void Sequential<Scalar>::evaluate(const Scalar* params, const StreamLayout& layout,
+                                  const Eigen::Ref<const Matrix<Scalar>>& x,
+                                  Streams<Scalar>& out) const {
+  if (modules_.empty()) throw std::logic_error("Sequential::evaluate: no modules");
+  const Eigen::Index n = x.rows(), block = options_.block_points;
+  const Eigen::Index blocks = (n + block - 1) / block;
+  const int threads = thread_count(options_.threads);
+  out.resize(n, layout.count(), output_width());
+  if (static_cast<int>(workspaces_.size()) < threads) workspaces_.resize(threads);
+  for (auto& w : workspaces_)
+    if (!w) w = std::make_unique<Workspace>();
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (Eigen::Index b = 0; b < blocks; ++b) {
+    Workspace& ws = workspace(omp_get_thread_num());
+    const Eigen::Index first = b * block, rows = std::min(block, n - first);
+    ws.activations.resize(2);
+    seed_input_streams<Scalar>(layout, x.middleRows(first, rows), ws.activations[0]);
+    for (size_t l = 0; l < modules_.size(); ++l) {
+      modules_[l]->forward(layout, params + offsets_[l], ws.activations[0], ws.activations[1],
+                           nullptr);
+      std::swap(ws.activations[0], ws.activations[1]);
+    }
+    for (int s = 0; s < layout.count(); ++s)
+      out.stream(s).middleRows(first, rows) = ws.activations[0].stream(s);
+  }
+}
+
+template <typename Scalar>
+double Sequential<Scalar>::value_and_gradient(const Scalar* params, const StreamLayout& layout,
+                                              const Eigen::Ref<const Matrix<Scalar>>& x,
+                                              const StreamLoss<Scalar>& loss,
+                                              Scalar* gradient) const {
+  if (modules_.empty()) throw std::logic_error("Sequential::value_and_gradient: no modules");
+  const Eigen::Index n = x.rows(), block = options_.block_points;
+  const Eigen::Index blocks = (n + block - 1) / block;
+  const int threads = thread_count(options_.threads);
+  const size_t depth = modules_.size();
+  if (static_cast<int>(workspaces_.size()) < threads) workspaces_.resize(threads);
+  for (auto& w : workspaces_) {
+    if (!w) w = std::make_unique<Workspace>();
+    w->gradient.setZero(parameter_count_);
+    w->loss = 0;
+  }
+#pragma omp parallel num_threads(threads)
+  {
+    Workspace& ws = workspace(omp_get_thread_num());
+    ws.activations.resize(depth + 1);
+    ws.saved.resize(depth);
+#pragma omp for schedule(static)
+    for (Eigen::Index b = 0; b < blocks; ++b) {
+      const Eigen::Index first = b * block, rows = std::min(block, n - first);
+      seed_input_streams<Scalar>(layout, x.middleRows(first, rows), ws.activations[0]);
+      for (size_t l = 0; l < depth; ++l)
+        modules_[l]->forward(layout, params + offsets_[l], ws.activations[l],
+                             ws.activations[l + 1], &ws.saved[l]);
+      const Streams<Scalar>& out = ws.activations[depth];
+      ws.adjoint.resize(out.points, out.count, out.width());
+      ws.adjoint.data.setZero();
+      ws.loss += loss.evaluate(first, layout, out, ws.adjoint);
+      for (size_t l = depth; l-- > 0;) {
+        modules_[l]->backward(layout, params + offsets_[l], ws.activations[l], ws.saved[l],
+                              ws.adjoint, ws.gradient.data() + offsets_[l],
+                              l > 0 ? &ws.next_adjoint : nullptr);
+        if (l > 0) std::swap(ws.adjoint, ws.next_adjoint);
+      }
+    }
+  }
+  double total = 0;
+  Eigen::Map<Vector<Scalar>> g(gradient, parameter_count_);
+  for (int t = 0; t < threads; ++t) {
+    g += workspaces_[t]->gradient;
+    total += workspaces_[t]->loss;
+  }
+  return total;
+}
+
+template class Sequential<float>;
+template class Sequential<double>;
+
+}  // namespace nfield::autodiff

@@ -1,0 +1,68 @@
+// SPDX-License-Identifier: MIT
+//
+// A chain of modules evaluated over a batch of points, forward and reverse.
+//
+// The batch is cut into blocks of `block_points` points; the threads (OpenMP, static
+// schedule) each take contiguous blocks and run forward, loss and reverse pass on one block
+// at a time, keeping only that block's tape. Memory therefore grows with the block size and
+// the thread count, not with the batch, and each layer's streams still go through one
+// matrix product per block. Gradients are summed per thread and then in thread order, so a
+// run is bit-for-bit repeatable for a given thread count.
+//
+// Not thread-safe: one call at a time per Sequential (it reuses its per-thread workspaces).
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "autodiff/module.h"
+#include "autodiff/stream_loss.h"
+
+namespace nfield::autodiff {
+
+struct SequentialOptions {
+  Eigen::Index block_points = 128;  // points per block; > 0
+  int threads = 0;                  // 0: omp_get_max_threads()
+};
+
+template <typename Scalar>
+class Sequential {
+ public:
+  explicit Sequential(SequentialOptions options = {});
+  Sequential(Sequential&&) noexcept;
+  Sequential& operator=(Sequential&&) noexcept;
+  ~Sequential();
+
+  // Appends a module; its input width must match the last output width.
+  void add(std::unique_ptr<Module<Scalar>> module);
+
+  const std::vector<std::unique_ptr<Module<Scalar>>>& modules() const { return modules_; }
+  Eigen::Index input_width() const;
+  Eigen::Index output_width() const;
+  Eigen::Index parameter_count() const { return parameter_count_; }
+  Eigen::Index parameter_offset(size_t module) const { return offsets_[module]; }
+  const SequentialOptions& options() const { return options_; }
+  void set_options(const SequentialOptions& options);
+
+  // Output streams at points x (N × input_dim).
+  void evaluate(const Scalar* params, const StreamLayout& layout,
+                const Eigen::Ref<const Matrix<Scalar>>& x, Streams<Scalar>& out) const;
+
+  // Σ over points of `loss`; adds its parameter gradient into `gradient` (length
+  // parameter_count(); not cleared here). Returns the loss sum.
+  double value_and_gradient(const Scalar* params, const StreamLayout& layout,
+                            const Eigen::Ref<const Matrix<Scalar>>& x,
+                            const StreamLoss<Scalar>& loss, Scalar* gradient) const;
+
+ private:
+  struct Workspace;
+  Workspace& workspace(int thread) const;
+
+  SequentialOptions options_;
+  std::vector<std::unique_ptr<Module<Scalar>>> modules_;
+  std::vector<Eigen::Index> offsets_;
+  Eigen::Index parameter_count_ = 0;
+  mutable std::vector<std::unique_ptr<Workspace>> workspaces_;
+};
+
+}  // namespace nfield::autodiff

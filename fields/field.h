@@ -1,0 +1,82 @@
+// SPDX-License-Identifier: MIT
+//
+// A field f_θ: R^d → R^m, a coordinate network with one flat parameter vector θ.
+//
+//   siren  x → γ(x) → [Dense → sin(ω·)] × H → Dense              (Sitzmann et al. 2020)
+//          first layer ω = first_omega, later ones hidden_omega; weights of the first layer
+//          U(−1/n, 1/n), later U(−√(6/n)/ω, √(6/n)/ω), n the fan-in; biases U(−1/√n, 1/√n).
+//   mlp    x → γ(x) → [Dense → σ] × H → Dense, σ = `activation`; He-uniform weights for relu,
+//          Xavier-uniform otherwise, zero biases.
+//
+// `hidden` lists the H hidden widths: the SIREN reference network of the paper, d → 256,
+// three 256 → 256 layers and 256 → 1, is hidden = [256, 256, 256, 256].
+// Complex-valued fields use output_dim = 2 (real, imaginary).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "autodiff/sequential.h"
+#include "fields/encodings.h"
+
+namespace nfield::fields {
+
+struct FieldOptions {
+  std::string type = "siren";         // siren | mlp
+  int input_dim = 2;                  // 1 … 4
+  int output_dim = 1;                 // ≥ 1
+  std::vector<int> hidden{256, 256, 256, 256};
+  std::string activation = "sine";    // mlp only: sine | tanh | softplus | relu | identity
+  double first_omega = 30.0;          // siren: ω₀ of the first layer
+  double hidden_omega = 30.0;         // siren: ω of later layers (mlp sine: its frequency)
+  EncodingOptions encoding;
+  std::uint64_t seed = 0;             // initial weights
+
+  // Throws std::invalid_argument naming the field, its value and the rule.
+  void validate() const;
+};
+
+std::vector<std::string> field_type_names();
+
+template <typename Scalar>
+class Field {
+ public:
+  explicit Field(FieldOptions options, autodiff::SequentialOptions evaluation = {});
+
+  const FieldOptions& options() const { return options_; }
+  int input_dim() const { return options_.input_dim; }
+  int output_dim() const { return options_.output_dim; }
+  Eigen::Index parameter_count() const { return network_.parameter_count(); }
+
+  autodiff::Vector<Scalar>& parameters() { return parameters_; }
+  const autodiff::Vector<Scalar>& parameters() const { return parameters_; }
+  // The fixed encoding matrix B (empty for the identity encoding).
+  const Eigen::MatrixXd& encoding_matrix() const { return encoding_matrix_; }
+
+  const autodiff::Sequential<Scalar>& network() const { return network_; }
+  autodiff::Sequential<Scalar>& network() { return network_; }
+
+  // Draws θ from the initialization of `options().type` with `options().seed`.
+  void initialize();
+
+  // Output streams at x (N × d), at the field's own parameters.
+  void evaluate(const autodiff::StreamLayout& layout, const Eigen::Ref<const autodiff::Matrix<Scalar>>& x,
+                autodiff::Streams<Scalar>& out) const {
+    network_.evaluate(parameters_.data(), layout, x, out);
+  }
+  // Values only: N × output_dim.
+  autodiff::Matrix<Scalar> values(const Eigen::Ref<const autodiff::Matrix<Scalar>>& x) const;
+
+  // The same field in another scalar type (parameters converted).
+  template <typename Other>
+  Field<Other> cast() const;
+
+ private:
+  FieldOptions options_;
+  Eigen::MatrixXd encoding_matrix_;
+  autodiff::Sequential<Scalar> network_;
+  autodiff::Vector<Scalar> parameters_;
+};
+
+}  // namespace nfield::fields

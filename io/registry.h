@@ -1,0 +1,69 @@
+// SPDX-License-Identifier: MIT
+//
+// A registry of named components of one family (activations, encodings, fields, problems,
+// optimizers). Names are matched case-insensitively; an unknown name raises an error that
+// lists every valid name. Each family fills its registry in one plain function.
+#pragma once
+
+#include <algorithm>
+#include <cctype>
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace nfield {
+
+class UnknownNameError : public std::invalid_argument {
+ public:
+  using std::invalid_argument::invalid_argument;
+};
+
+template <typename Entry>
+class Registry {
+ public:
+  explicit Registry(std::string family) : family_(std::move(family)) {}
+
+  void add(std::string_view name, Entry entry) {
+    const std::string key = lower(name);
+    if (!entries_.emplace(key, std::move(entry)).second)
+      throw std::logic_error(family_ + " '" + key + "' registered twice");
+  }
+
+  bool contains(std::string_view name) const { return entries_.count(lower(name)) > 0; }
+
+  const Entry& at(std::string_view name) const {
+    auto it = entries_.find(lower(name));
+    if (it == entries_.end())
+      throw UnknownNameError("unknown " + family_ + " '" + std::string(name) +
+                             "' (valid: " + joined_names() + ")");
+    return it->second;
+  }
+
+  // Sorted, lower-case.
+  std::vector<std::string> names() const {
+    std::vector<std::string> out;
+    for (const auto& [name, entry] : entries_) out.push_back(name);
+    return out;
+  }
+
+  std::string joined_names() const {
+    std::string out;
+    for (const auto& [name, entry] : entries_) out += (out.empty() ? "" : ", ") + name;
+    return out;
+  }
+
+  static std::string lower(std::string_view name) {
+    std::string out(name);
+    std::transform(out.begin(), out.end(), out.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return out;
+  }
+
+ private:
+  std::string family_;
+  std::map<std::string, Entry> entries_;
+};
+
+}  // namespace nfield
