@@ -1,0 +1,264 @@
+// SPDX-License-Identifier: MIT
+#include "apps/bench_command.h"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "fields/field.h"
+#include "solvers/adam.h"
+
+namespace nfield::apps {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using MatrixF = autodiff::Matrix<float>;
+
+struct BenchOptions {
+  std::vector<std::string> ops{"laplacian", "wave"};
+  std::vector<long> batches{1024, 4096, 16384};
+  std::vector<int> hidden{256, 256, 256, 256};
+  int steps = 10;
+  int warmup = 2;
+  int threads = 0;
+  long block = 128;
+  bool json_only = false;
+};
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+// Peak resident memory since the last reset_peak_rss(), in MiB (Linux /proc).
+void reset_peak_rss() { std::ofstream("/proc/self/clear_refs") << "5"; }
+double peak_rss_mb() {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line))
+    if (line.rfind("VmHWM:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;
+  return -1;
+}
+
+// The operator a benchmark step trains: which streams, and how the residual reads them.
+struct Operator {
+  int dims;
+  autodiff::StreamSpec spec;
+  std::vector<std::pair<int, float>> residual;  // Σ weight · stream, then minus the source
+};
+
+Operator make_operator(const std::string& name) {
+  if (name == "laplacian") {
+    Operator op{2, autodiff::StreamSpec::laplacian(2), {}};
+    op.residual = {{3, 1.0f}};
+    return op;
+  }
+  if (name == "wave") {
+    Operator op{3, autodiff::StreamSpec::gradient(3), {}};
+    op.spec.add_operator(Eigen::Vector3d(-1.0, -1.0, 1.0).asDiagonal().toDenseMatrix());
+    op.residual = {{4, 1.0f}};
+    return op;
+  }
+  if (name == "biharmonic") {
+    // Δ²u = (2/3)(D⁴ₓ + D⁴ᵧ) + (1/6)(D⁴₍ₓ₊ᵧ₎ + D⁴₍ₓ₋ᵧ₎), D⁴_w = 4! z_{w,4}.
+    Operator op{2, autodiff::StreamSpec::values(2), {}};
+    Eigen::MatrixXd directions(2, 4);
+    directions << 1, 0, 1, 1, 0, 1, 1, -1;
+    op.spec.set_taylor(directions, 4);
+    const autodiff::StreamLayout layout(op.spec);
+    const float axis = 24.0f * 2.0f / 3.0f, diagonal = 24.0f / 6.0f;
+    op.residual = {{layout.taylor(0, 4), axis},
+                   {layout.taylor(1, 4), axis},
+                   {layout.taylor(2, 4), diagonal},
+                   {layout.taylor(3, 4), diagonal}};
+    return op;
+  }
+  throw CLI::ValidationError("--op", "unknown operator '" + name +
+                                         "' (valid: laplacian, wave, biharmonic)");
+}
+
+// Floating-point operations of the matrix products in one step.
+double step_flops(const fields::Field<float>& field, long batch, int streams) {
+  double flops = 0;
+  const auto& modules = field.network().modules();
+  for (size_t m = 0; m < modules.size(); ++m) {
+    if (modules[m]->parameter_count() == 0) continue;
+    const double shape = 2.0 * batch * streams * modules[m]->input_width() * modules[m]->output_width();
+    flops += m == 0 ? 2 * shape : 3 * shape;  // forward, W̄, and Ā except for the first layer
+  }
+  return flops;
+}
+
+// The same products at the full batch size with plain Eigen, best of Eigen's own threading
+// and an even split of the rows over the threads. Returns GFLOP/s.
+double gemm_gflops(const fields::Field<float>& field, long batch, int streams, int repeats) {
+  struct Shape { Eigen::Index in, out; bool input_adjoint; };
+  std::vector<Shape> shapes;
+  const auto& modules = field.network().modules();
+  for (size_t m = 0; m < modules.size(); ++m)
+    if (modules[m]->parameter_count() > 0)
+      shapes.push_back({modules[m]->input_width(), modules[m]->output_width(), m != 0});
+  const Eigen::Index rows = batch * streams;
+  std::vector<MatrixF> a, z, w, z_bar, a_bar, w_bar;
+  for (const Shape& s : shapes) {
+    a.push_back(MatrixF::Random(rows, s.in));
+    w.push_back(MatrixF::Random(s.out, s.in));
+    z.push_back(MatrixF(rows, s.out));
+    z_bar.push_back(MatrixF::Random(rows, s.out));
+    a_bar.push_back(MatrixF(rows, s.in));
+    w_bar.push_back(MatrixF(s.out, s.in));
+  }
+  double flops = 0;
+  for (const Shape& s : shapes) flops += (s.input_adjoint ? 3 : 2) * 2.0 * rows * s.in * s.out;
+  const int threads = omp_get_max_threads();
+  auto eigen_threaded = [&] {
+    for (size_t l = 0; l < shapes.size(); ++l) {
+      z[l].noalias() = a[l] * w[l].transpose();
+      w_bar[l].noalias() = z_bar[l].transpose() * a[l];
+      if (shapes[l].input_adjoint) a_bar[l].noalias() = z_bar[l] * w[l];
+    }
+  };
+  std::vector<MatrixF> partial(threads);
+  auto row_split = [&] {
+    for (size_t l = 0; l < shapes.size(); ++l) {
+#pragma omp parallel num_threads(threads)
+      {
+        const int t = omp_get_thread_num();
+        const Eigen::Index first = rows * t / threads, count = rows * (t + 1) / threads - first;
+        z[l].middleRows(first, count).noalias() = a[l].middleRows(first, count) * w[l].transpose();
+        partial[t].noalias() = z_bar[l].middleRows(first, count).transpose() * a[l].middleRows(first, count);
+        if (shapes[l].input_adjoint)
+          a_bar[l].middleRows(first, count).noalias() = z_bar[l].middleRows(first, count) * w[l];
+      }
+      w_bar[l] = partial[0];
+      for (int t = 1; t < threads; ++t) w_bar[l] += partial[t];
+    }
+  };
+  auto time = [&](auto&& run) {
+    run();
+    std::vector<double> seconds;
+    for (int r = 0; r < repeats; ++r) {
+      const auto start = Clock::now();
+      run();
+      seconds.push_back(std::chrono::duration<double>(Clock::now() - start).count());
+    }
+    return flops / median(seconds) * 1e-9;
+  };
+  return std::max(time(eigen_threaded), time(row_split));
+}
+
+struct StepResult {
+  double median_ms, gflops, gemm_gflops, peak_mb;
+};
+
+StepResult bench_step(const BenchOptions& options, const std::string& op_name, long batch) {
+  Operator op = make_operator(op_name);
+  const autodiff::StreamLayout layout(op.spec);
+  fields::FieldOptions field_options;
+  field_options.input_dim = op.dims;
+  field_options.hidden = options.hidden;
+  reset_peak_rss();
+  fields::Field<float> field(field_options, {options.block, options.threads});
+  solvers::Adam<float> adam(field.parameter_count(), {1e-5});
+  const MatrixF x = MatrixF::Random(batch, op.dims);
+  const autodiff::Vector<float> source = autodiff::Vector<float>::Random(batch);
+  const float scale = 2.0f / static_cast<float>(batch);
+  // mean((L u − f)²): the adjoint is 2 r / N on each stream the residual reads.
+  autodiff::LambdaLoss<float> loss([&](Eigen::Index first, const autodiff::StreamLayout&,
+                                       const autodiff::Streams<float>& out,
+                                       autodiff::Streams<float>& adjoint) {
+    autodiff::Vector<float> r = -source.segment(first, out.points);
+    for (const auto& [stream, weight] : op.residual) r += weight * out.stream(stream).col(0);
+    for (const auto& [stream, weight] : op.residual) adjoint.stream(stream).col(0) = (scale * weight) * r;
+    return static_cast<double>(r.squaredNorm()) / batch;
+  });
+  autodiff::Vector<float> gradient(field.parameter_count());
+  auto step = [&] {
+    gradient.setZero();
+    field.network().value_and_gradient(field.parameters().data(), layout, x, loss, gradient.data());
+    adam.step(field.parameters().data(), gradient.data());
+  };
+  std::vector<double> ms;
+  for (int s = 0; s < options.warmup + options.steps; ++s) {
+    const auto start = Clock::now();
+    step();
+    if (s >= options.warmup)
+      ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - start).count());
+  }
+  StepResult result;
+  result.median_ms = median(ms);
+  result.peak_mb = peak_rss_mb();
+  result.gflops = step_flops(field, batch, layout.count()) / (result.median_ms * 1e-3) * 1e-9;
+  result.gemm_gflops = gemm_gflops(field, batch, layout.count(), std::max(3, options.steps / 2));
+  return result;
+}
+
+void run_bench(const BenchOptions& options) {
+  if (options.threads > 0) omp_set_num_threads(options.threads);
+  std::vector<std::string> lines;
+  if (!options.json_only)
+    std::printf("SIREN %s, float, %d threads, block %ld points\n%-11s %4s %7s %12s %9s %10s %7s %9s\n",
+                [&] {
+                  std::string s;
+                  for (int h : options.hidden) s += (s.empty() ? "" : "x") + std::to_string(h);
+                  return s;
+                }().c_str(),
+                omp_get_max_threads(), options.block, "op", "dims", "batch", "step ms",
+                "GFLOP/s", "GEMM GF/s", "ratio", "peak MB");
+  for (const std::string& op : options.ops)
+    for (long batch : options.batches) {
+      const StepResult r = bench_step(options, op, batch);
+      const int dims = make_operator(op).dims;
+      if (!options.json_only) {
+        std::printf("%-11s %4d %7ld %12.2f %9.1f %10.1f %6.0f%% %9.0f\n", op.c_str(), dims, batch,
+                    r.median_ms, r.gflops, r.gemm_gflops, 100 * r.gflops / r.gemm_gflops, r.peak_mb);
+        std::fflush(stdout);
+      }
+      char line[512];
+      std::snprintf(line, sizeof line,
+                    "{\"impl\": \"nfield\", \"op\": \"%s\", \"dims\": %d, \"batch\": %ld, "
+                    "\"median_step_ms\": %.3f, \"gflops\": %.2f, \"gemm_gflops\": %.2f, "
+                    "\"peak_rss_mb\": %.1f, \"threads\": %d}",
+                    op.c_str(), dims, batch, r.median_ms, r.gflops, r.gemm_gflops, r.peak_mb,
+                    omp_get_max_threads());
+      lines.push_back(line);
+      if (options.json_only) std::puts(line), std::fflush(stdout);
+    }
+  if (!options.json_only)
+    for (const std::string& line : lines) std::puts(line.c_str());
+}
+
+}  // namespace
+
+void add_bench_command(CLI::App& app) {
+  auto options = std::make_shared<BenchOptions>();
+  CLI::App* bench = app.add_subcommand(
+      "bench", "Time full training steps (streams, reverse pass, Adam) of the SIREN reference "
+               "network against the matrix-product rate measured in the same run");
+  bench->add_option("--op", options->ops, "Operators: laplacian (2D), wave (x, y, t), biharmonic (2D)")
+      ->check(CLI::IsMember({"laplacian", "wave", "biharmonic"}))
+      ->capture_default_str();
+  bench->add_option("--batch", options->batches, "Batch sizes")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  bench->add_option("--hidden", options->hidden, "Hidden widths")->check(CLI::PositiveNumber)->capture_default_str();
+  bench->add_option("--steps", options->steps, "Timed steps per configuration")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  bench->add_option("--warmup", options->warmup, "Untimed steps first")->check(CLI::Range(0, 1000))->capture_default_str();
+  bench->add_option("--threads", options->threads, "Threads (0: all)")->check(CLI::Range(0, 1024))->capture_default_str();
+  bench->add_option("--block", options->block, "Points per block of the chunked pass")
+      ->check(CLI::Range(1L, 1L << 20))
+      ->capture_default_str();
+  bench->add_flag("--json", options->json_only, "Print only the JSON lines");
+  bench->callback([options] { run_bench(*options); });
+}
+
+}  // namespace nfield::apps

@@ -1,0 +1,65 @@
+// SPDX-License-Identifier: MIT
+#include "apps/run_commands.h"
+
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+
+#include "solvers/run.h"
+
+namespace nfield::apps {
+namespace {
+
+struct RunArguments {
+  std::string config;
+  std::vector<std::string> overrides;
+  std::string out;
+  std::string resume;
+};
+
+struct EvalArguments {
+  std::string checkpoint;
+  int grid = 128;
+  std::string out;
+};
+
+}  // namespace
+
+void add_run_commands(CLI::App& app) {
+  auto run = std::make_shared<RunArguments>();
+  CLI::App* run_command = app.add_subcommand("run", "Train a field on the problem a config describes and write its outputs");
+  run_command->add_option("config", run->config, "The YAML config")->required()->check(CLI::ExistingFile);
+  run_command->add_option("--set", run->overrides, "Override a config value: key.path=value (repeatable)");
+  run_command->add_option("--out", run->out, "Output folder (overrides output.dir)");
+  run_command->add_option("--resume", run->resume, "Continue from a checkpoint written by an earlier run")
+      ->check(CLI::ExistingFile);
+  run_command->callback([run] {
+    solvers::RunSetup setup = solvers::load_run(run->config, run->overrides, run->out);
+    const int code = solvers::execute_run(setup, run->resume);
+    if (code != 0) throw CLI::RuntimeError(code);
+  });
+
+  auto validate = std::make_shared<RunArguments>();
+  CLI::App* validate_command = app.add_subcommand("validate", "Check a config and print it resolved; writes nothing");
+  validate_command->add_option("config", validate->config, "The YAML config")->required()->check(CLI::ExistingFile);
+  validate_command->add_option("--set", validate->overrides, "Override a config value: key.path=value (repeatable)");
+  validate_command->callback([validate] {
+    const solvers::RunSetup setup = solvers::load_run(validate->config, validate->overrides);
+    std::printf("%s: valid\n%s\n", validate->config.c_str(), io::to_yaml(setup.resolved).c_str());
+  });
+
+  auto eval = std::make_shared<EvalArguments>();
+  CLI::App* eval_command = app.add_subcommand("eval", "Sample a checkpoint's field onto a grid and write VTK");
+  eval_command->add_option("checkpoint", eval->checkpoint, "A checkpoint.h5 from nfield run")
+      ->required()
+      ->check(CLI::ExistingFile);
+  eval_command->add_option("--grid", eval->grid, "Points per space axis")->check(CLI::Range(2, 4096))->capture_default_str();
+  eval_command->add_option("--out", eval->out, "Output folder (default: beside the checkpoint, eval/)");
+  eval_command->callback([eval] {
+    const std::filesystem::path out =
+        eval->out.empty() ? std::filesystem::path(eval->checkpoint).parent_path() / "eval" : std::filesystem::path(eval->out);
+    solvers::evaluate_checkpoint(eval->checkpoint, eval->grid, out);
+  });
+}
+
+}  // namespace nfield::apps

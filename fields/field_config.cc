@@ -1,0 +1,68 @@
+// SPDX-License-Identifier: MIT
+#include "fields/field_config.h"
+
+#include "fields/activations.h"
+
+namespace nfield::fields {
+
+FieldOptions field_options_from_config(const io::ConfigNode& node, int input_dim, int output_dim,
+                                       std::uint64_t seed) {
+  FieldOptions o;
+  o.input_dim = input_dim;
+  o.output_dim = output_dim;
+  o.type = node.get_choice("type", field_type_names(), "siren");
+  if (node.has("hidden")) {
+    o.hidden = node.get<std::vector<int>>("hidden");
+    node.require("hidden", !o.hidden.empty(), "expected a non-empty list of widths");
+    for (int h : o.hidden) node.require("hidden", h >= 1 && h <= 16384, "expected widths in [1, 16384]");
+  }
+  if (o.type == "mlp") o.activation = node.get_choice("activation", activation_names(), "tanh");
+  o.first_omega = node.get_or("first_omega", o.first_omega);
+  node.require("first_omega", o.first_omega > 0, "expected a number > 0");
+  o.hidden_omega = node.get_or("hidden_omega", o.hidden_omega);
+  node.require("hidden_omega", o.hidden_omega > 0, "expected a number > 0");
+  o.seed = node.has("seed") ? static_cast<std::uint64_t>(node.get_nonnegative<std::int64_t>("seed")) : seed;
+  if (node.has("encoding")) {
+    const io::ConfigNode e = node.child("encoding");
+    o.encoding.type = e.get_choice("type", encoding_names(), "identity");
+    if (o.encoding.type == "positional") {
+      if (e.has("frequencies")) o.encoding.frequencies = e.get_in_range("frequencies", 1, 24);
+      o.encoding.include_input = e.get_or("include_input", true);
+    } else if (o.encoding.type == "fourier") {
+      if (e.has("features")) o.encoding.features = e.get_in_range("features", 1, 65536);
+      o.encoding.scale = e.get_or("scale", o.encoding.scale);
+      e.require("scale", o.encoding.scale > 0, "expected a number > 0");
+      o.encoding.seed = e.has("seed") ? static_cast<std::uint64_t>(e.get_nonnegative<std::int64_t>("seed")) : o.seed;
+    }
+    e.reject_unknown_keys();
+  }
+  node.reject_unknown_keys();
+  try {
+    o.validate();
+  } catch (const std::invalid_argument& error) {
+    throw node.error(error.what());
+  }
+  return o;
+}
+
+YAML::Node to_yaml(const FieldOptions& o) {
+  YAML::Node n;
+  n["type"] = o.type;
+  n["hidden"] = o.hidden;
+  if (o.type == "mlp") n["activation"] = o.activation;
+  n["first_omega"] = o.first_omega;
+  n["hidden_omega"] = o.hidden_omega;
+  n["seed"] = o.seed;
+  n["encoding"]["type"] = o.encoding.type;
+  if (o.encoding.type == "positional") {
+    n["encoding"]["frequencies"] = o.encoding.frequencies;
+    n["encoding"]["include_input"] = o.encoding.include_input;
+  } else if (o.encoding.type == "fourier") {
+    n["encoding"]["features"] = o.encoding.features;
+    n["encoding"]["scale"] = o.encoding.scale;
+    n["encoding"]["seed"] = o.encoding.seed;
+  }
+  return n;
+}
+
+}  // namespace nfield::fields

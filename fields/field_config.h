@@ -1,0 +1,27 @@
+// SPDX-License-Identifier: MIT
+//
+// The `field:` section of a config (defaults in FieldOptions, fields/field.h):
+//
+//   field:
+//     type: siren             # siren | mlp
+//     hidden: [64, 64, 64]    # hidden widths
+//     first_omega: 30         # siren
+//     hidden_omega: 30        # siren (mlp with sine: its frequency)
+//     activation: tanh        # mlp: sine | tanh | softplus | relu | identity
+//     seed: 0                 # default: training.seed
+//     encoding: {type: fourier, features: 128, scale: 10}   # identity | positional | fourier
+#pragma once
+
+#include <yaml-cpp/yaml.h>
+
+#include "fields/field.h"
+#include "io/config.h"
+
+namespace nfield::fields {
+
+// input_dim and output_dim come from the problem; `seed` is the default seed.
+FieldOptions field_options_from_config(const io::ConfigNode& node, int input_dim, int output_dim,
+                                       std::uint64_t seed);
+YAML::Node to_yaml(const FieldOptions& options);
+
+}  // namespace nfield::fields

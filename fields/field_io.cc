@@ -1,0 +1,87 @@
+// SPDX-License-Identifier: MIT
+#include "fields/field_io.h"
+
+#include <type_traits>
+
+namespace nfield::fields {
+
+template <typename Scalar>
+void save_field(io::H5Writer& file, const Field<Scalar>& field, const std::string& group) {
+  const FieldOptions& o = field.options();
+  file.create_group(group);
+  file.write_attribute(group, "type", o.type);
+  file.write_attribute(group, "input_dim", o.input_dim);
+  file.write_attribute(group, "output_dim", o.output_dim);
+  std::vector<std::int64_t> hidden(o.hidden.begin(), o.hidden.end());
+  file.write_attribute(group, "hidden", std::span<const std::int64_t>(hidden));
+  file.write_attribute(group, "activation", o.activation);
+  file.write_attribute(group, "first_omega", o.first_omega);
+  file.write_attribute(group, "hidden_omega", o.hidden_omega);
+  file.write_attribute(group, "seed", static_cast<std::int64_t>(o.seed));
+  file.write_attribute(group, "precision", std::is_same_v<Scalar, float> ? "float" : "double");
+  file.write_attribute(group, "encoding_type", o.encoding.type);
+  file.write_attribute(group, "encoding_frequencies", o.encoding.frequencies);
+  file.write_attribute(group, "encoding_include_input", static_cast<std::int64_t>(o.encoding.include_input));
+  file.write_attribute(group, "encoding_features", o.encoding.features);
+  file.write_attribute(group, "encoding_scale", o.encoding.scale);
+  file.write_attribute(group, "encoding_seed", static_cast<std::int64_t>(o.encoding.seed));
+  if (field.encoding_matrix().rows() > 0) file.write(group + "/encoding", field.encoding_matrix());
+  const auto& modules = field.network().modules();
+  int layer = 0;
+  for (size_t m = 0; m < modules.size(); ++m) {
+    const Eigen::Index in = modules[m]->input_width(), out = modules[m]->output_width();
+    if (modules[m]->parameter_count() == 0) continue;
+    const Scalar* p = field.parameters().data() + field.network().parameter_offset(m);
+    const std::string prefix = group + "/layers/" + std::to_string(layer++);
+    file.write(prefix + "/weight", Eigen::Map<const autodiff::Matrix<Scalar>>(p, out, in));
+    file.write(prefix + "/bias", Eigen::Map<const autodiff::Vector<Scalar>>(p + out * in, out));
+  }
+}
+
+FieldOptions load_field_options(const io::H5Reader& file, const std::string& group) {
+  FieldOptions o;
+  o.type = file.read_attribute<std::string>(group, "type");
+  o.input_dim = static_cast<int>(file.read_attribute<std::int64_t>(group, "input_dim"));
+  o.output_dim = static_cast<int>(file.read_attribute<std::int64_t>(group, "output_dim"));
+  const auto hidden = file.read_attribute<std::vector<std::int64_t>>(group, "hidden");
+  o.hidden.assign(hidden.begin(), hidden.end());
+  o.activation = file.read_attribute<std::string>(group, "activation");
+  o.first_omega = file.read_attribute<double>(group, "first_omega");
+  o.hidden_omega = file.read_attribute<double>(group, "hidden_omega");
+  o.seed = static_cast<std::uint64_t>(file.read_attribute<std::int64_t>(group, "seed"));
+  o.encoding.type = file.read_attribute<std::string>(group, "encoding_type");
+  o.encoding.frequencies = static_cast<int>(file.read_attribute<std::int64_t>(group, "encoding_frequencies"));
+  o.encoding.include_input = file.read_attribute<std::int64_t>(group, "encoding_include_input") != 0;
+  o.encoding.features = static_cast<int>(file.read_attribute<std::int64_t>(group, "encoding_features"));
+  o.encoding.scale = file.read_attribute<double>(group, "encoding_scale");
+  o.encoding.seed = static_cast<std::uint64_t>(file.read_attribute<std::int64_t>(group, "encoding_seed"));
+  return o;
+}
+
+template <typename Scalar>
+Field<Scalar> load_field(const io::H5Reader& file, const std::string& group) {
+  Field<Scalar> field(load_field_options(file, group));
+  const auto& modules = field.network().modules();
+  int layer = 0;
+  for (size_t m = 0; m < modules.size(); ++m) {
+    const Eigen::Index in = modules[m]->input_width(), out = modules[m]->output_width();
+    if (modules[m]->parameter_count() == 0) continue;
+    Scalar* p = field.parameters().data() + field.network().parameter_offset(m);
+    const std::string prefix = group + "/layers/" + std::to_string(layer++);
+    const auto weight = file.read_matrix<Scalar>(prefix + "/weight");
+    const auto bias = file.read_vector<Scalar>(prefix + "/bias");
+    if (weight.rows() != out || weight.cols() != in || bias.size() != out)
+      throw io::H5Error(file.path().string() + ": " + prefix + " has the wrong shape for " +
+                        std::to_string(out) + " x " + std::to_string(in));
+    Eigen::Map<autodiff::Matrix<Scalar>>(p, out, in) = weight;
+    Eigen::Map<autodiff::Vector<Scalar>>(p + out * in, out) = bias;
+  }
+  return field;
+}
+
+template void save_field<float>(io::H5Writer&, const Field<float>&, const std::string&);
+template void save_field<double>(io::H5Writer&, const Field<double>&, const std::string&);
+template Field<float> load_field<float>(const io::H5Reader&, const std::string&);
+template Field<double> load_field<double>(const io::H5Reader&, const std::string&);
+
+}  // namespace nfield::fields

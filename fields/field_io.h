@@ -1,0 +1,34 @@
+// SPDX-License-Identifier: MIT
+//
+// Fields in HDF5, in a layout h5py users read directly:
+//
+//   /field                      group; attributes: type, input_dim, output_dim, hidden,
+//                               activation, first_omega, hidden_omega, seed, precision,
+//                               encoding_type, encoding_frequencies, encoding_include_input,
+//                               encoding_features, encoding_scale, encoding_seed
+//   /field/layers/K/weight      out × in (as PyTorch's nn.Linear.weight), layer K = 0, 1, …
+//   /field/layers/K/bias        out
+//   /field/encoding             the fixed encoding matrix B (m × d), when there is one
+//
+// Values are stored in the field's own precision, so a save/load round trip is bit-exact.
+#pragma once
+
+#include <string>
+
+#include "fields/field.h"
+#include "io/hdf5_file.h"
+
+namespace nfield::fields {
+
+template <typename Scalar>
+void save_field(io::H5Writer& file, const Field<Scalar>& field, const std::string& group = "field");
+
+// Reads a field saved by save_field, converting to Scalar if it was saved in the other
+// precision. Throws io::H5Error naming the file and what is missing.
+template <typename Scalar>
+Field<Scalar> load_field(const io::H5Reader& file, const std::string& group = "field");
+
+// The options stored with a saved field.
+FieldOptions load_field_options(const io::H5Reader& file, const std::string& group = "field");
+
+}  // namespace nfield::fields

@@ -1,0 +1,722 @@
+// SPDX-License-Identifier: MIT
+#include "io/config.h"
+
+#include <algorithm>
+#include <array>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <optional>
+#include <sstream>
+#include <system_error>
+#include <utility>
+
+namespace nfield::io {
+namespace {
+
+std::string located_message(const std::string& file, const YAML::Mark& mark,
+                            const std::string& key_path, const std::string& message) {
+  std::string out = file;
+  if (mark.line >= 0 && mark.column >= 0)
+    out += (out.empty() ? "" : ":") + std::to_string(mark.line + 1) + ":" +
+           std::to_string(mark.column + 1);
+  if (!out.empty()) out += ": ";
+  if (!key_path.empty()) out += key_path + ": ";
+  return out + message;
+}
+
+bool is_empty(const YAML::Node& node) { return !node.IsDefined() || node.IsNull(); }
+
+std::string describe(const YAML::Node& node) {
+  if (is_empty(node)) return "an empty value";
+  if (node.IsMap()) return "a mapping";
+  if (node.IsSequence()) return "a list of " + std::to_string(node.size());
+  return "'" + node.Scalar() + "'";
+}
+
+std::string to_lower(std::string_view text) {
+  std::string out(text);
+  for (char& c : out)
+    if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
+  return out;
+}
+
+std::string join(const std::vector<std::string>& items) {
+  std::string out;
+  for (const std::string& item : items) out += (out.empty() ? "" : ", ") + item;
+  return out.empty() ? "none" : out;
+}
+
+std::string join_key(const std::string& path, std::string_view key) {
+  return path.empty() ? std::string(key) : path + "." + std::string(key);
+}
+
+std::string shortest_text(double value) {
+  if (std::isnan(value)) return ".nan";
+  if (std::isinf(value)) return value > 0 ? ".inf" : "-.inf";
+  std::array<char, 64> buffer;
+  auto [end, ec] = std::to_chars(buffer.data(), buffer.data() + buffer.size(), value);
+  std::string text(buffer.data(), end);
+  // YAML 1.1 readers (PyYAML) want a dot in exponent notation: 1e-05 -> 1.0e-05.
+  if (auto e = text.find('e'); e != std::string::npos && text.find('.') == std::string::npos)
+    text.insert(e, ".0");
+  return text;
+}
+
+std::optional<double> parse_double(std::string_view text) {
+  const std::string lower = to_lower(text);
+  if (lower == ".inf" || lower == "+.inf") return std::numeric_limits<double>::infinity();
+  if (lower == "-.inf") return -std::numeric_limits<double>::infinity();
+  if (lower == ".nan") return std::numeric_limits<double>::quiet_NaN();
+  if (!text.empty() && text.front() == '+') text.remove_prefix(1);
+  if (text.empty() || text.front() == '+') return std::nullopt;
+  double value = 0;
+  auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (ec != std::errc() || end != text.data() + text.size()) return std::nullopt;
+  return value;
+}
+
+// Integers may be written as integral floating-point text (`1e4`), not as `1.5`.
+std::optional<std::int64_t> parse_integer(std::string_view text) {
+  std::string_view digits = text;
+  if (!digits.empty() && digits.front() == '+') digits.remove_prefix(1);
+  std::int64_t value = 0;
+  auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), value);
+  if (!digits.empty() && ec == std::errc() && end == digits.data() + digits.size()) return value;
+  std::optional<double> real = parse_double(text);
+  if (!real || !std::isfinite(*real) || std::trunc(*real) != *real ||
+      std::abs(*real) >= 9.2233720368547758e18)
+    return std::nullopt;
+  return static_cast<std::int64_t>(*real);
+}
+
+std::optional<bool> parse_bool(std::string_view text) {
+  const std::string lower = to_lower(text);
+  if (lower == "true" || lower == "yes" || lower == "on") return true;
+  if (lower == "false" || lower == "no" || lower == "off") return false;
+  return std::nullopt;
+}
+
+// What a value of type T is called in messages: `expected a number`, `a list of numbers`.
+template <class T>
+struct Noun;
+template <>
+struct Noun<double> {
+  static constexpr const char* one = "a number";
+  static constexpr const char* many = "numbers";
+};
+template <>
+struct Noun<int> {
+  static constexpr const char* one = "an integer";
+  static constexpr const char* many = "integers";
+};
+template <>
+struct Noun<std::int64_t> : Noun<int> {};
+template <>
+struct Noun<std::string> {
+  static constexpr const char* one = "a string";
+  static constexpr const char* many = "strings";
+};
+template <>
+struct Noun<bool> {
+  static constexpr const char* one = "true or false";
+  static constexpr const char* many = "booleans";
+};
+
+template <class T>
+struct ListElement {
+  using type = void;
+};
+template <class T>
+struct ListElement<std::vector<T>> {
+  using type = T;
+};
+
+// A place in a config that errors refer to.
+struct Where {
+  const std::string& file;
+  YAML::Mark mark;
+  std::string path;
+  ConfigError error(const std::string& message) const {
+    return ConfigError(file, mark, path, message);
+  }
+};
+
+// Where `node` starts in its file; null for nodes made in code (e.g. by --set), so that
+// their errors name no line rather than a wrong one.
+YAML::Mark own_mark(const YAML::Node& node) {
+  return node.IsDefined() ? node.Mark() : YAML::Mark::null_mark();
+}
+
+template <ConfigScalar T>
+T convert_scalar(const YAML::Node& node, const Where& where) {
+  const auto fail = [&] {
+    return where.error(std::string("expected ") + Noun<T>::one + ", got " + describe(node));
+  };
+  if (!node.IsDefined() || !node.IsScalar()) throw fail();
+  const std::string& text = node.Scalar();
+  if constexpr (std::is_same_v<T, std::string>) {
+    return text;
+  } else if constexpr (std::is_same_v<T, bool>) {
+    if (auto value = parse_bool(text)) return *value;
+    throw fail();
+  } else if constexpr (std::is_same_v<T, double>) {
+    if (auto value = parse_double(text)) return *value;
+    throw fail();
+  } else {
+    auto value = parse_integer(text);
+    if (!value) throw fail();
+    if (*value < std::numeric_limits<T>::min() || *value > std::numeric_limits<T>::max())
+      throw where.error("expected an integer between " +
+                        std::to_string(std::numeric_limits<T>::min()) + " and " +
+                        std::to_string(std::numeric_limits<T>::max()) + ", got '" + text + "'");
+    return static_cast<T>(*value);
+  }
+}
+
+template <ConfigScalar T>
+std::vector<T> convert_list(const YAML::Node& node, const Where& where,
+                            std::optional<std::size_t> count) {
+  const std::string wanted =
+      count ? "a list of " + std::to_string(*count) + " " +
+                  (*count == 1 ? std::string(Noun<T>::one).substr(std::string(Noun<T>::one).find(' ') + 1)
+                               : std::string(Noun<T>::many))
+            : std::string("a list of ") + Noun<T>::many;
+  if (!node.IsDefined() || !node.IsSequence())
+    throw where.error("expected " + wanted + ", got " + describe(node));
+  if (count && node.size() != *count)
+    throw where.error("expected " + wanted + ", got " + describe(node));
+  std::vector<T> values;
+  values.reserve(node.size());
+  for (std::size_t i = 0; i < node.size(); ++i) {
+    const YAML::Node element = node[i];
+    values.push_back(convert_scalar<T>(
+        element,
+        Where{where.file, own_mark(element), where.path + "[" + std::to_string(i) + "]"}));
+  }
+  return values;
+}
+
+template <ConfigValue T>
+T convert(const YAML::Node& node, const Where& where) {
+  if constexpr (ConfigScalar<T>)
+    return convert_scalar<T>(node, where);
+  else
+    return convert_list<typename ListElement<T>::type>(node, where, std::nullopt);
+}
+
+template <class T>
+std::string number_text(T value) {
+  if constexpr (std::is_same_v<T, double>)
+    return shortest_text(value);
+  else
+    return std::to_string(value);
+}
+
+// Rejects duplicate and non-scalar keys, which yaml-cpp accepts silently.
+void check_structure(const YAML::Node& node, const std::string& file, const std::string& path) {
+  if (node.IsMap()) {
+    std::map<std::string, int, std::less<>> first_line;
+    for (const auto& entry : node) {
+      const YAML::Node& key = entry.first;
+      if (!key.IsScalar())
+        throw ConfigError(file, key.Mark(), path,
+                          "expected a plain name as key, got " + describe(key));
+      auto [it, inserted] = first_line.emplace(key.Scalar(), key.Mark().line + 1);
+      if (!inserted)
+        throw ConfigError(file, key.Mark(), path,
+                          "duplicate key '" + key.Scalar() + "' (first on line " +
+                              std::to_string(it->second) + ")");
+      check_structure(entry.second, file, join_key(path, key.Scalar()));
+    }
+  } else if (node.IsSequence()) {
+    for (std::size_t i = 0; i < node.size(); ++i)
+      check_structure(node[i], file, path + "[" + std::to_string(i) + "]");
+  }
+}
+
+// A copy of `node` without source marks, so that values from --set are not reported at
+// line numbers of the --set text.
+YAML::Node without_marks(const YAML::Node& node) {
+  if (is_empty(node)) return YAML::Node(YAML::NodeType::Null);
+  if (node.IsScalar()) {
+    YAML::Node out(node.Scalar());
+    out.SetTag(node.Tag());
+    return out;
+  }
+  YAML::Node out(node.IsMap() ? YAML::NodeType::Map : YAML::NodeType::Sequence);
+  if (node.IsMap()) {
+    for (const auto& entry : node) out[without_marks(entry.first)] = without_marks(entry.second);
+  } else {
+    for (const auto& element : node) out.push_back(without_marks(element));
+  }
+  out.SetStyle(node.Style());
+  return out;
+}
+
+void flow_scalar_lists(YAML::Node node) {
+  if (node.IsMap()) {
+    for (auto entry : node) flow_scalar_lists(entry.second);
+  } else if (node.IsSequence()) {
+    bool scalars_only = true;
+    for (auto element : node) {
+      scalars_only = scalars_only && (element.IsScalar() || element.IsNull());
+      flow_scalar_lists(element);
+    }
+    if (scalars_only && node.size() > 0) node.SetStyle(YAML::EmitterStyle::Flow);
+  }
+}
+
+}  // namespace
+
+// ---- ConfigError ------------------------------------------------------------------
+
+ConfigError::ConfigError(std::string file, const YAML::Mark& mark, std::string key_path,
+                         std::string message)
+    : std::runtime_error(located_message(file, mark, key_path, message)),
+      file_(std::move(file)),
+      line_(mark.line >= 0 ? mark.line + 1 : 0),
+      column_(mark.line >= 0 && mark.column >= 0 ? mark.column + 1 : 0),
+      key_path_(std::move(key_path)),
+      message_(std::move(message)) {}
+
+// ---- ConfigNode -------------------------------------------------------------------
+
+struct ConfigNode::KeyLog {
+  // Key path of each opened node -> keys asked for there, in the order asked.
+  std::map<std::string, std::vector<std::string>, std::less<>> keys;
+};
+
+ConfigNode::ConfigNode(YAML::Node node, std::string file)
+    : ConfigNode(node, node.Mark(), std::move(file), "", std::make_shared<KeyLog>()) {}
+
+ConfigNode::ConfigNode(YAML::Node node, YAML::Mark mark, std::string file, std::string path,
+                       std::shared_ptr<KeyLog> log)
+    : node_(std::move(node)),
+      mark_(mark),
+      file_(std::move(file)),
+      path_(std::move(path)),
+      log_(std::move(log)) {
+  log_->keys.try_emplace(path_);
+}
+
+ConfigNode ConfigNode::make_child(const YAML::Node& node, std::string path) const {
+  return ConfigNode(node, own_mark(node), file_, std::move(path), log_);
+}
+
+std::string ConfigNode::child_path(std::string_view key) const { return join_key(path_, key); }
+
+void ConfigNode::note_key(std::string_view key) const {
+  std::vector<std::string>& keys = log_->keys[path_];
+  if (std::find(keys.begin(), keys.end(), key) == keys.end()) keys.emplace_back(key);
+}
+
+std::optional<ConfigNode::Entry> ConfigNode::find(std::string_view key) const {
+  note_key(key);
+  if (!node_.IsMap()) {
+    if (!is_empty(node_))
+      throw error("expected a mapping with key '" + std::string(key) + "', got " +
+                  describe(node_));
+    return std::nullopt;
+  }
+  for (const auto& entry : node_)
+    if (entry.first.IsScalar() && entry.first.Scalar() == key)
+      return Entry{entry.first, entry.second};
+  return std::nullopt;
+}
+
+YAML::Node ConfigNode::require_value(std::string_view key) const {
+  std::optional<Entry> entry = find(key);
+  if (!entry) throw error("missing required key '" + std::string(key) + "'");
+  return entry->value;
+}
+
+std::size_t ConfigNode::size() const {
+  return node_.IsMap() || node_.IsSequence() ? node_.size() : 0;
+}
+
+std::vector<std::string> ConfigNode::keys() const {
+  std::vector<std::string> out;
+  if (node_.IsMap())
+    for (const auto& entry : node_) out.push_back(entry.first.Scalar());
+  return out;
+}
+
+ConfigNode ConfigNode::at(std::size_t index) const {
+  if (!node_.IsSequence()) throw error("expected a list, got " + describe(node_));
+  if (index >= node_.size())
+    throw error("index " + std::to_string(index) + " out of range (the list has " +
+                std::to_string(node_.size()) + " items)");
+  return make_child(node_[index], path_ + "[" + std::to_string(index) + "]");
+}
+
+template <ConfigValue T>
+T ConfigNode::as() const {
+  return convert<T>(node_, Where{file_, mark_, path_});
+}
+
+bool ConfigNode::has(std::string_view key) const {
+  note_key(key);
+  if (!node_.IsMap()) return false;
+  for (const auto& entry : node_)
+    if (entry.first.IsScalar() && entry.first.Scalar() == key) return true;
+  return false;
+}
+
+template <ConfigValue T>
+T ConfigNode::get(std::string_view key) const {
+  const YAML::Node value = require_value(key);
+  return convert<T>(value, Where{file_, own_mark(value), child_path(key)});
+}
+
+template <ConfigValue T>
+T ConfigNode::get_or(std::string_view key, const T& fallback) const {
+  std::optional<Entry> entry = find(key);
+  if (!entry || is_empty(entry->value)) return fallback;
+  return convert<T>(entry->value, Where{file_, own_mark(entry->value), child_path(key)});
+}
+
+std::string ConfigNode::get_or(std::string_view key, const char* fallback) const {
+  return get_or<std::string>(key, std::string(fallback));
+}
+
+template <ConfigScalar T>
+  requires(!std::is_same_v<T, bool>)
+std::vector<T> ConfigNode::get_list(std::string_view key, std::size_t count) const {
+  const YAML::Node value = require_value(key);
+  return convert_list<T>(value, Where{file_, own_mark(value), child_path(key)}, count);
+}
+
+template <ConfigNumber T>
+T ConfigNode::get_positive(std::string_view key) const {
+  const T value = get<T>(key);
+  require(key, value > 0,
+          std::is_same_v<T, double> ? "expected a positive number, got '" + number_text(value) + "'"
+                                    : "expected a positive integer, got '" + number_text(value) + "'");
+  return value;
+}
+
+template <ConfigNumber T>
+T ConfigNode::get_nonnegative(std::string_view key) const {
+  const T value = get<T>(key);
+  require(key, value >= 0,
+          std::string("expected ") + Noun<T>::one + " >= 0, got '" + number_text(value) + "'");
+  return value;
+}
+
+template <ConfigNumber T>
+T ConfigNode::get_in_range(std::string_view key, T lowest, T highest) const {
+  const T value = get<T>(key);
+  require(key, value >= lowest && value <= highest,
+          std::string("expected ") + Noun<T>::one + " in [" + number_text(lowest) + ", " +
+              number_text(highest) + "], got '" + number_text(value) + "'");
+  return value;
+}
+
+std::string ConfigNode::get_choice(std::string_view key,
+                                   const std::vector<std::string>& choices) const {
+  const std::string value = get<std::string>(key);
+  for (const std::string& choice : choices)
+    if (to_lower(choice) == to_lower(value)) return choice;
+  throw error(key, "expected one of " + join(choices) + "; got '" + value + "'");
+}
+
+std::string ConfigNode::get_choice(std::string_view key, const std::vector<std::string>& choices,
+                                   std::string_view fallback) const {
+  std::optional<Entry> entry = find(key);
+  if (!entry || is_empty(entry->value)) return std::string(fallback);
+  return get_choice(key, choices);
+}
+
+Expression ConfigNode::get_expression(std::string_view key,
+                                      std::vector<std::string> variables) const {
+  const YAML::Node value = require_value(key);
+  const std::string text =
+      convert_scalar<std::string>(value, Where{file_, own_mark(value), child_path(key)});
+  try {
+    return Expression(text, std::move(variables));
+  } catch (const ExpressionError& e) {
+    YAML::Mark mark = own_mark(value);
+    // Point at the offending character when the text sits on one line of the file:
+    // plain scalars start at the mark, quoted ones (tag "!") one character later.
+    if (value.Mark().line >= 0 && e.position() != std::string::npos &&
+        e.position() <= text.size() && text.find('\n') == std::string::npos &&
+        (value.Tag() == "?" || value.Tag() == "!"))
+      mark.column += static_cast<int>(e.position()) + (value.Tag() == "!" ? 1 : 0);
+    throw ConfigError(file_, mark, child_path(key), e.what());
+  }
+}
+
+Expression ConfigNode::get_expression_or(std::string_view key, std::string_view fallback,
+                                         std::vector<std::string> variables) const {
+  std::optional<Entry> entry = find(key);
+  if (!entry || is_empty(entry->value)) return Expression(std::string(fallback), variables);
+  return get_expression(key, std::move(variables));
+}
+
+ConfigNode ConfigNode::child(std::string_view key) const {
+  const YAML::Node value = require_value(key);
+  if (!value.IsMap() && !value.IsSequence())
+    throw error(key, "expected a mapping or a list, got " + describe(value));
+  return make_child(value, child_path(key));
+}
+
+ConfigNode ConfigNode::child_or_empty(std::string_view key) const {
+  std::optional<Entry> entry = find(key);
+  if (!entry || is_empty(entry->value))
+    return ConfigNode(YAML::Node(YAML::NodeType::Map), entry ? own_mark(entry->key) : YAML::Mark::null_mark(),
+                      file_, child_path(key), log_);
+  return child(key);
+}
+
+ConfigError ConfigNode::error(std::string_view message) const {
+  return ConfigError(file_, mark_, path_, std::string(message));
+}
+
+ConfigError ConfigNode::error(std::string_view key, std::string_view message) const {
+  YAML::Mark mark = mark_;
+  if (node_.IsMap())
+    for (const auto& entry : node_)
+      if (entry.first.IsScalar() && entry.first.Scalar() == key) {
+        mark = own_mark(entry.second);
+        break;
+      }
+  return ConfigError(file_, mark, child_path(key), std::string(message));
+}
+
+void ConfigNode::require(bool ok, std::string_view message) const {
+  if (!ok) throw error(message);
+}
+
+void ConfigNode::require(std::string_view key, bool ok, std::string_view message) const {
+  if (!ok) throw error(key, message);
+}
+
+void ConfigNode::check_keys(const YAML::Node& node, const std::string& path,
+                            const std::vector<std::string>& valid) const {
+  if (!node.IsMap()) return;
+  for (const auto& entry : node) {
+    const std::string& key = entry.first.Scalar();
+    if (std::find(valid.begin(), valid.end(), key) == valid.end())
+      throw ConfigError(file_, own_mark(entry.first), path,
+                        "unknown key '" + key + "' (valid keys: " + join(valid) + ")");
+  }
+}
+
+void ConfigNode::reject_unknown_keys() const { check_keys(node_, path_, log_->keys[path_]); }
+
+void ConfigNode::check_recursive(const YAML::Node& node, const std::string& path) const {
+  if (node.IsMap()) {
+    auto opened = log_->keys.find(path);
+    if (opened == log_->keys.end()) return;
+    check_keys(node, path, opened->second);
+    for (const auto& entry : node) check_recursive(entry.second, join_key(path, entry.first.Scalar()));
+  } else if (node.IsSequence()) {
+    for (std::size_t i = 0; i < node.size(); ++i)
+      check_recursive(node[i], path + "[" + std::to_string(i) + "]");
+  }
+}
+
+void ConfigNode::reject_unknown_keys_recursive() const { check_recursive(node_, path_); }
+
+void ConfigNode::expect_keys(const std::vector<std::string>& allowed) const {
+  for (const std::string& key : allowed) note_key(key);
+  check_keys(node_, path_, allowed);
+}
+
+void ConfigNode::accept_all_keys() const {
+  for (const std::string& key : keys()) note_key(key);
+}
+
+// Explicit instantiations: the getters exist for exactly the ConfigValue types.
+#define NFIELD_CONFIG_VALUE(T)                                                 \
+  template T ConfigNode::as<T>() const;                                        \
+  template T ConfigNode::get<T>(std::string_view) const;                       \
+  template T ConfigNode::get_or<T>(std::string_view, const T&) const;
+NFIELD_CONFIG_VALUE(bool)
+NFIELD_CONFIG_VALUE(int)
+NFIELD_CONFIG_VALUE(std::int64_t)
+NFIELD_CONFIG_VALUE(double)
+NFIELD_CONFIG_VALUE(std::string)
+NFIELD_CONFIG_VALUE(std::vector<double>)
+NFIELD_CONFIG_VALUE(std::vector<int>)
+NFIELD_CONFIG_VALUE(std::vector<std::int64_t>)
+NFIELD_CONFIG_VALUE(std::vector<std::string>)
+#undef NFIELD_CONFIG_VALUE
+
+#define NFIELD_CONFIG_NUMBER(T)                                                         \
+  template std::vector<T> ConfigNode::get_list<T>(std::string_view, std::size_t) const; \
+  template T ConfigNode::get_positive<T>(std::string_view) const;                       \
+  template T ConfigNode::get_nonnegative<T>(std::string_view) const;                    \
+  template T ConfigNode::get_in_range<T>(std::string_view, T, T) const;
+NFIELD_CONFIG_NUMBER(int)
+NFIELD_CONFIG_NUMBER(std::int64_t)
+NFIELD_CONFIG_NUMBER(double)
+#undef NFIELD_CONFIG_NUMBER
+template std::vector<std::string> ConfigNode::get_list<std::string>(std::string_view,
+                                                                    std::size_t) const;
+
+// ---- loading and overrides ----------------------------------------------------------
+
+ConfigNode parse_config(std::string_view text, std::string file_name,
+                        std::span<const std::string> overrides) {
+  std::vector<YAML::Node> documents;
+  try {
+    documents = YAML::LoadAll(std::string(text));
+  } catch (const YAML::Exception& e) {
+    throw ConfigError(file_name, e.mark, "", "YAML syntax error: " + e.msg);
+  }
+  if (documents.size() > 1)
+    throw ConfigError(file_name, documents[1].Mark(), "",
+                      "expected one YAML document, found " + std::to_string(documents.size()));
+  YAML::Node root = documents.empty() ? YAML::Node(YAML::NodeType::Map) : documents[0];
+  check_structure(root, file_name, "");
+  for (const std::string& assignment : overrides) apply_override(root, assignment);
+  if (is_empty(root)) root.reset(YAML::Node(YAML::NodeType::Map));
+  if (!root.IsMap())
+    throw ConfigError(file_name, root.Mark(), "",
+                      "expected a mapping of keys at the top level, got " + describe(root));
+  return ConfigNode(root, std::move(file_name));
+}
+
+ConfigNode load_config(const std::filesystem::path& path,
+                       std::span<const std::string> overrides) {
+  const std::string file = path.string();
+  const YAML::Mark nowhere = YAML::Mark::null_mark();
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec))
+    throw ConfigError(file, nowhere, "", "config file not found");
+  if (std::filesystem::is_directory(path, ec))
+    throw ConfigError(file, nowhere, "", "is a directory, not a config file");
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  if (in) text << in.rdbuf();
+  if (!in || in.bad()) throw ConfigError(file, nowhere, "", "cannot read config file");
+  return parse_config(text.str(), file, overrides);
+}
+
+void apply_override(YAML::Node& root, std::string_view assignment) {
+  const std::string where = "--set '" + std::string(assignment) + "'";
+  const auto fail = [&](const std::string& path, const std::string& message) {
+    return ConfigError(where, YAML::Mark::null_mark(), path, message);
+  };
+  const auto trim = [](std::string_view s) {
+    while (!s.empty() && std::isspace(static_cast<unsigned char>(s.front()))) s.remove_prefix(1);
+    while (!s.empty() && std::isspace(static_cast<unsigned char>(s.back()))) s.remove_suffix(1);
+    return s;
+  };
+  const std::size_t equals = assignment.find('=');
+  if (equals == std::string_view::npos) throw fail("", "expected KEY.PATH=VALUE");
+  const std::string_view key = trim(assignment.substr(0, equals));
+  const std::string_view value_text = trim(assignment.substr(equals + 1));
+  if (key.empty()) throw fail("", "missing key path before '='");
+  if (value_text.empty()) throw fail("", "missing value after '='");
+
+  // Key path: name ('[' index ']')* ('.' name ('[' index ']')*)*; a name of digits
+  // indexes a list when the node it applies to is a list.
+  struct Step {
+    std::string name;
+    bool bracketed;
+  };
+  std::vector<Step> steps;
+  std::size_t pos = 0;
+  while (true) {
+    const std::size_t start = pos;
+    while (pos < key.size() && key[pos] != '.' && key[pos] != '[' && key[pos] != ']') ++pos;
+    const std::string_view name = key.substr(start, pos - start);
+    if (name.empty() || trim(name).size() != name.size())
+      throw fail("", "expected a key name at position " + std::to_string(start + 1) +
+                         " of '" + std::string(key) + "'");
+    steps.push_back({std::string(name), false});
+    while (pos < key.size() && key[pos] == '[') {
+      const std::size_t close = key.find(']', pos);
+      const std::string_view index =
+          close == std::string_view::npos ? std::string_view() : key.substr(pos + 1, close - pos - 1);
+      if (index.empty() || !std::all_of(index.begin(), index.end(), [](char c) { return c >= '0' && c <= '9'; }))
+        throw fail("", "expected [INDEX] at position " + std::to_string(pos + 1) + " of '" +
+                           std::string(key) + "'");
+      steps.push_back({std::string(index), true});
+      pos = close + 1;
+    }
+    if (pos == key.size()) break;
+    if (key[pos] != '.')
+      throw fail("", "unexpected '" + std::string(1, key[pos]) + "' at position " +
+                         std::to_string(pos + 1) + " of '" + std::string(key) + "'");
+    ++pos;
+  }
+
+  YAML::Node value;
+  try {
+    value = without_marks(YAML::Load(std::string(value_text)));
+  } catch (const YAML::Exception& e) {
+    throw fail("", "cannot parse the value as YAML: " + e.msg);
+  }
+  check_structure(value, where, "");
+
+  if (is_empty(root)) root = YAML::Node(YAML::NodeType::Map);
+  YAML::Node current;
+  current.reset(root);
+  std::string path;
+  for (std::size_t k = 0; k < steps.size(); ++k) {
+    const Step& step = steps[k];
+    const bool last = k + 1 == steps.size();
+    const bool digits = std::all_of(step.name.begin(), step.name.end(),
+                                    [](char c) { return c >= '0' && c <= '9'; });
+    if (step.bracketed || (digits && current.IsSequence())) {
+      if (!current.IsSequence())
+        throw fail(path, "expected a list to index with [" + step.name + "], got " +
+                             describe(current));
+      std::size_t index = 0;
+      auto [end, ec] = std::from_chars(step.name.data(), step.name.data() + step.name.size(), index);
+      if (ec != std::errc() || index >= current.size())
+        throw fail(path, "index " + step.name + " out of range (the list has " +
+                             std::to_string(current.size()) + " items)");
+      path += "[" + step.name + "]";
+      if (last) {
+        current[index] = value;
+      } else {
+        YAML::Node next = current[index];
+        current.reset(next);
+      }
+    } else {
+      if (!current.IsMap())
+        throw fail(path, "expected a mapping to set key '" + step.name + "' in, got " +
+                             describe(current));
+      path = join_key(path, step.name);
+      if (last) {
+        current[step.name] = value;
+      } else {
+        YAML::Node next = current[step.name];
+        if (is_empty(next)) {
+          current[step.name] = YAML::Node(YAML::NodeType::Map);
+          next.reset(current[step.name]);
+        }
+        current.reset(next);
+      }
+    }
+  }
+}
+
+// ---- writing ----------------------------------------------------------------------
+
+std::string to_yaml(const YAML::Node& node) {
+  YAML::Node copy = YAML::Clone(node);
+  flow_scalar_lists(copy);
+  YAML::Emitter out;
+  out.SetIndent(2);
+  out << copy;
+  return std::string(out.c_str()) + "\n";
+}
+
+YAML::Node yaml_number(double value) { return YAML::Node(shortest_text(value)); }
+
+YAML::Node yaml_numbers(std::span<const double> values) {
+  YAML::Node out(YAML::NodeType::Sequence);
+  for (double value : values) out.push_back(yaml_number(value));
+  out.SetStyle(YAML::EmitterStyle::Flow);
+  return out;
+}
+
+}  // namespace nfield::io

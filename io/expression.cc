@@ -1,0 +1,173 @@
+// SPDX-License-Identifier: MIT
+#include "io/expression.h"
+
+#include <algorithm>
+#include <cmath>
+#include <mutex>
+#include <numbers>
+#include <set>
+#include <utility>
+
+#include <muParser.h>
+
+namespace nfield::io {
+namespace {
+
+double step(double x) { return x >= 0.0 ? 1.0 : 0.0; }
+double power(double base, double exponent) { return std::pow(base, exponent); }
+
+bool is_identifier(std::string_view name) {
+  auto alpha = [](char c) { return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || c == '_'; };
+  auto digit = [](char c) { return c >= '0' && c <= '9'; };
+  return !name.empty() && alpha(name.front()) &&
+         std::all_of(name.begin(), name.end(), [&](char c) { return alpha(c) || digit(c); });
+}
+
+std::size_t error_position(const mu::ParserError& e) {
+  return e.GetPos() < 0 ? std::string::npos : static_cast<std::size_t>(e.GetPos());
+}
+
+// A muparser instance bound to its own variable storage. Parsers are not thread-safe
+// (Eval mutates internal stacks), so each concurrent evaluate borrows one.
+struct Evaluator {
+  mu::Parser parser;
+  std::vector<double> values;
+};
+
+}  // namespace
+
+ExpressionError::ExpressionError(std::string expression, std::size_t position,
+                                 std::string reason)
+    : std::runtime_error("in expression '" + expression + "': " + reason),
+      expression_(std::move(expression)),
+      position_(position),
+      reason_(std::move(reason)) {}
+
+struct Expression::Shared {
+  std::string text;
+  std::vector<std::string> variables;
+  std::vector<bool> used;
+  std::mutex mutex;
+  std::vector<std::unique_ptr<Evaluator>> idle;
+
+  std::unique_ptr<Evaluator> make_evaluator() const {
+    auto evaluator = std::make_unique<Evaluator>();
+    evaluator->values.assign(variables.size(), 0.0);
+    mu::Parser& parser = evaluator->parser;
+    try {
+      parser.DefineConst("pi", std::numbers::pi);
+      parser.DefineConst("e", std::numbers::e);
+      parser.DefineFun("pow", power);
+      parser.DefineFun("heaviside", step);
+      parser.DefineFun("step", step);
+      for (std::size_t i = 0; i < variables.size(); ++i)
+        parser.DefineVar(variables[i], &evaluator->values[i]);
+      parser.SetExpr(text);
+      parser.Eval();  // compiles to bytecode; reports syntax errors and unknown names
+    } catch (const mu::ParserError& e) {
+      throw ExpressionError(text, error_position(e), e.GetMsg());
+    }
+    if (parser.GetNumResults() != 1)
+      throw ExpressionError(text, std::string::npos,
+                            "expected a single expression, got " +
+                                std::to_string(parser.GetNumResults()) +
+                                " separated by commas");
+    return evaluator;
+  }
+
+  std::unique_ptr<Evaluator> borrow() {
+    {
+      std::lock_guard lock(mutex);
+      if (!idle.empty()) {
+        auto evaluator = std::move(idle.back());
+        idle.pop_back();
+        return evaluator;
+      }
+    }
+    return make_evaluator();
+  }
+
+  void give_back(std::unique_ptr<Evaluator> evaluator) noexcept {
+    try {
+      std::lock_guard lock(mutex);
+      idle.push_back(std::move(evaluator));
+    } catch (...) {  // out of memory: let this evaluator go
+    }
+  }
+
+  // Returns a borrowed evaluator to the pool even when evaluation throws.
+  class Lease {
+   public:
+    explicit Lease(Shared& shared) : shared_(shared), evaluator_(shared.borrow()) {}
+    ~Lease() { shared_.give_back(std::move(evaluator_)); }
+    Lease(const Lease&) = delete;
+    Lease& operator=(const Lease&) = delete;
+    Evaluator& operator*() { return *evaluator_; }
+
+   private:
+    Shared& shared_;
+    std::unique_ptr<Evaluator> evaluator_;
+  };
+};
+
+Expression::Expression(std::string text, std::vector<std::string> variables)
+    : shared_(std::make_shared<Shared>()) {
+  std::set<std::string_view> seen;
+  for (const std::string& name : variables) {
+    if (!is_identifier(name))
+      throw ExpressionError(text, std::string::npos, "invalid variable name '" + name + "'");
+    if (!seen.insert(name).second)
+      throw ExpressionError(text, std::string::npos, "variable '" + name + "' listed twice");
+  }
+  shared_->text = std::move(text);
+  shared_->variables = std::move(variables);
+  auto evaluator = shared_->make_evaluator();
+  const mu::varmap_type& used = evaluator->parser.GetUsedVar();
+  for (const std::string& name : shared_->variables)
+    shared_->used.push_back(used.count(name) > 0);
+  shared_->give_back(std::move(evaluator));
+}
+
+Eigen::VectorXd Expression::evaluate(const Eigen::Ref<const Eigen::MatrixXd>& points) const {
+  const auto columns = static_cast<std::size_t>(points.cols());
+  if (columns > shared_->variables.size())
+    throw std::invalid_argument("expression '" + shared_->text + "' has " +
+                                std::to_string(shared_->variables.size()) +
+                                " variables, got points with " + std::to_string(columns) +
+                                " columns");
+  Eigen::VectorXd result(points.rows());
+  if (points.rows() == 0) return result;
+  Shared::Lease lease(*shared_);
+  Evaluator& evaluator = *lease;
+  std::fill(evaluator.values.begin(), evaluator.values.end(), 0.0);
+  try {
+    for (Eigen::Index row = 0; row < points.rows(); ++row) {
+      for (std::size_t col = 0; col < columns; ++col)
+        evaluator.values[col] = points(row, static_cast<Eigen::Index>(col));
+      result[row] = evaluator.parser.Eval();
+    }
+  } catch (const mu::ParserError& e) {
+    throw ExpressionError(shared_->text, error_position(e), e.GetMsg());
+  }
+  return result;
+}
+
+double Expression::evaluate(std::span<const double> point) const {
+  return evaluate(Eigen::Map<const Eigen::RowVectorXd>(point.data(),
+                                                       static_cast<Eigen::Index>(point.size())))[0];
+}
+
+bool Expression::uses(std::string_view variable) const {
+  for (std::size_t i = 0; i < shared_->variables.size(); ++i)
+    if (shared_->variables[i] == variable) return shared_->used[i];
+  return false;
+}
+
+bool Expression::is_constant() const {
+  return std::none_of(shared_->used.begin(), shared_->used.end(), [](bool b) { return b; });
+}
+
+const std::string& Expression::text() const { return shared_->text; }
+const std::vector<std::string>& Expression::variables() const { return shared_->variables; }
+
+}  // namespace nfield::io

@@ -1,0 +1,77 @@
+// SPDX-License-Identifier: MIT
+#pragma once
+// Math expressions from config files, such as `2*pi^2*sin(pi*x)*sin(pi*y)`, evaluated
+// over batches of points (muparser underneath).
+//
+// Available: + - * / ^ (power), comparisons, `c ? a : b`; constants pi and e;
+// functions sin cos tan asin acos atan sinh cosh tanh asinh acosh atanh exp log (natural)
+// log2 log10 sqrt abs sign atan2(y, x) pow(a, b) min max sum avg, and
+// heaviside(x) = step(x) = (x >= 0 ? 1 : 0).
+//
+//   Expression source("2*pi^2*sin(pi*x)*sin(pi*y)");      // variables x, y, z, t
+//   Eigen::VectorXd f = source.evaluate(points);           // points: n x 2 -> z = t = 0
+//
+// Thread safety: evaluate may be called on the same Expression (or copies of it) from
+// many threads at once. Each call borrows a private muparser instance from a pool owned
+// by the expression, so no locking happens while evaluating. evaluate itself is serial;
+// parallelise over batches in the caller.
+
+#include <cstddef>
+#include <memory>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace nfield::io {
+
+// A malformed expression or an unknown name. what() is
+//   in expression 'sin(pi*q)': Unexpected token "q" found at position 7.
+// position() is the 0-based offset of the offending character (as in muparser's
+// message), so a config reader can turn it into a file column.
+class ExpressionError : public std::runtime_error {
+ public:
+  ExpressionError(std::string expression, std::size_t position, std::string reason);
+
+  const std::string& expression() const { return expression_; }
+  // 0-based; std::string::npos when muparser gives none.
+  std::size_t position() const { return position_; }
+  // muparser's message alone.
+  const std::string& reason() const { return reason_; }
+
+ private:
+  std::string expression_;
+  std::size_t position_;
+  std::string reason_;
+};
+
+class Expression {
+ public:
+  // Parses `text` (checked here: errors throw ExpressionError) over the named variables.
+  // A variable may not be named like a constant or function (`e`, `pi`, `exp`, ...).
+  explicit Expression(std::string text,
+                      std::vector<std::string> variables = {"x", "y", "z", "t"});
+
+  // One value per row of `points`; column j holds variable j. Missing trailing columns
+  // are 0 (a 2-D point sets x and y, with z = t = 0); more columns than variables is
+  // std::invalid_argument. Division by zero and the like give inf/nan, not errors.
+  Eigen::VectorXd evaluate(const Eigen::Ref<const Eigen::MatrixXd>& points) const;
+  // One point (variables in order, missing ones 0).
+  double evaluate(std::span<const double> point) const;
+
+  // Whether the expression mentions `variable` (e.g. `t` to tell time dependence).
+  bool uses(std::string_view variable) const;
+  // True if the expression mentions none of its variables.
+  bool is_constant() const;
+  const std::string& text() const;
+  const std::vector<std::string>& variables() const;
+
+ private:
+  struct Shared;
+  std::shared_ptr<Shared> shared_;
+};
+
+}  // namespace nfield::io

@@ -1,0 +1,145 @@
+// SPDX-License-Identifier: MIT
+#include "solvers/conditions.h"
+
+#include "io/registry.h"
+
+namespace nfield::solvers {
+
+std::vector<io::Expression> channel_expressions(const io::ConfigNode& node, std::string_view key,
+                                                const Domain& domain, int output_dim) {
+  std::vector<io::Expression> out;
+  if (node.has(key) && node.yaml()[std::string(key)].IsSequence()) {
+    const io::ConfigNode list = node.child(key);
+    node.require(key, static_cast<int>(list.size()) == output_dim,
+                 "expected " + std::to_string(output_dim) + " expressions, one per output channel");
+    for (std::size_t c = 0; c < list.size(); ++c)
+      out.push_back(node.child(key).at(c).as<std::string>().empty()
+                        ? io::Expression("0", domain.expression_variables())
+                        : io::Expression(list.at(c).as<std::string>(), domain.expression_variables()));
+    return out;
+  }
+  io::Expression e = node.get_expression(key, domain.expression_variables());
+  for (int c = 0; c < output_dim; ++c) out.push_back(c == 0 ? e : io::Expression("0", domain.expression_variables()));
+  return out;
+}
+
+Eigen::MatrixXd evaluate_channels(const std::vector<io::Expression>& expressions,
+                                  const Eigen::MatrixXd& points) {
+  Eigen::MatrixXd out(points.rows(), static_cast<Eigen::Index>(expressions.size()));
+  for (size_t c = 0; c < expressions.size(); ++c) out.col(c) = expressions[c].evaluate(points);
+  return out;
+}
+
+namespace {
+
+std::vector<Face> faces_of(const io::ConfigNode& item, const Domain& domain) {
+  std::vector<std::string> names;
+  if (item.yaml()["on"].IsSequence())
+    names = item.get<std::vector<std::string>>("on");
+  else
+    names = {item.get<std::string>("on")};
+  std::vector<Face> faces;
+  for (const std::string& name : names) {
+    if (Registry<int>::lower(name) == "boundary") {
+      const auto all = domain.faces();
+      faces.insert(faces.end(), all.begin(), all.end());
+      continue;
+    }
+    try {
+      faces.push_back(domain.face(name));
+    } catch (const UnknownNameError& e) {
+      throw item.error("on", std::string(e.what()) + ", or boundary, initial");
+    }
+  }
+  return faces;
+}
+
+LinearResidual value_residual(const Eigen::MatrixXd& target) {
+  std::vector<LinearResidual::Term> terms;
+  for (Eigen::Index c = 0; c < target.cols(); ++c)
+    terms.push_back({static_cast<int>(c), 0, static_cast<int>(c), Eigen::VectorXd::Ones(1)});
+  return LinearResidual(std::move(terms), target);
+}
+
+}  // namespace
+
+std::vector<LossTerm> condition_terms(const io::ConfigNode& conditions, const Domain& domain,
+                                      int output_dim) {
+  std::vector<LossTerm> terms;
+  if (conditions.is_null()) return terms;
+  conditions.require(conditions.is_sequence(), "expected a list of conditions");
+  for (std::size_t i = 0; i < conditions.size(); ++i) {
+    const io::ConfigNode item = conditions.at(i);
+    const bool initial = item.has("on") && !item.yaml()["on"].IsSequence() &&
+                         Registry<int>::lower(item.get<std::string>("on")) == "initial";
+    LossTerm term;
+    term.weight = item.get_or("weight", 1.0);
+    item.require("weight", term.weight >= 0, "expected a weight >= 0");
+    const auto values = channel_expressions(item, "value", domain, output_dim);
+    if (initial) {
+      if (!domain.has_time()) throw item.error("on", "'initial' needs a domain with a time interval");
+      const std::string type = item.get_choice("type", {"value", "velocity"});
+      term.batch_key = "initial";
+      term.sample = [&domain](Random& rng, Eigen::Index n) { return domain.sample_initial(rng, n); };
+      if (type == "value") {
+        term.name = "initial";
+        term.spec = autodiff::StreamSpec::values(domain.input_dim());
+        term.residual = [values](const Eigen::MatrixXd& x) {
+          return std::make_unique<LinearResidual>(value_residual(evaluate_channels(values, x)));
+        };
+      } else {
+        term.name = "initial_velocity";
+        term.spec = autodiff::StreamSpec::values(domain.input_dim());
+        term.spec.tangents = Eigen::MatrixXd::Zero(domain.input_dim(), 1);
+        term.spec.tangents(domain.time_column(), 0) = 1.0;
+        term.residual = [values](const Eigen::MatrixXd& x) {
+          const Eigen::MatrixXd target = evaluate_channels(values, x);
+          std::vector<LinearResidual::Term> t;
+          for (Eigen::Index c = 0; c < target.cols(); ++c)
+            t.push_back({static_cast<int>(c), 1, static_cast<int>(c), Eigen::VectorXd::Ones(1)});
+          return std::make_unique<LinearResidual>(std::move(t), target);
+        };
+      }
+    } else {
+      const std::string type = item.get_choice("type", {"dirichlet", "neumann"});
+      const std::vector<Face> faces = faces_of(item, domain);
+      term.batch_key = "boundary";
+      term.sample = [&domain, faces](Random& rng, Eigen::Index n) {
+        return domain.sample_faces(faces, rng, n);
+      };
+      if (type == "dirichlet") {
+        term.name = "dirichlet";
+        term.spec = autodiff::StreamSpec::values(domain.input_dim());
+        term.residual = [values](const Eigen::MatrixXd& x) {
+          return std::make_unique<LinearResidual>(value_residual(evaluate_channels(values, x)));
+        };
+      } else {
+        term.name = "neumann";
+        term.spec = autodiff::StreamSpec::gradient(domain.input_dim());
+        const Domain* d = &domain;
+        term.residual = [values, faces, d](const Eigen::MatrixXd& x) {
+          const Eigen::MatrixXd target = evaluate_channels(values, x);
+          // Each point's outward normal, from the face coordinate it was put on.
+          Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(x.rows(), d->space_dim());
+          for (Eigen::Index r = 0; r < x.rows(); ++r)
+            for (const Face& f : faces)
+              if (x(r, f.axis) == (f.upper ? d->upper()[f.axis] : d->lower()[f.axis])) {
+                normal(r, f.axis) = f.upper ? 1.0 : -1.0;
+                break;
+              }
+          std::vector<LinearResidual::Term> t;
+          for (Eigen::Index c = 0; c < target.cols(); ++c)
+            for (int a = 0; a < d->space_dim(); ++a)
+              t.push_back({static_cast<int>(c), 1 + a, static_cast<int>(c), normal.col(a)});
+          return std::make_unique<LinearResidual>(std::move(t), target);
+        };
+      }
+    }
+    if (!term.name.empty()) term.name += i > 0 ? "_" + std::to_string(i) : "";
+    item.reject_unknown_keys();
+    terms.push_back(std::move(term));
+  }
+  return terms;
+}
+
+}  // namespace nfield::solvers

@@ -1,0 +1,33 @@
+// SPDX-License-Identifier: MIT
+//
+// Boundary and initial conditions from the `conditions:` list of a config:
+//
+//   - {on: boundary, type: dirichlet, value: "0"}            u = g on every space face
+//   - {on: [x_min, y_max], type: neumann, value: "x*y"}      ∂u/∂n = g (outward normal)
+//   - {on: initial, type: value, value: "sin(pi*x)"}         u(x, t0) = g
+//   - {on: initial, type: velocity, value: "0"}              u_t(x, t0) = g
+//
+// `value` is one expression, or a list with one per output channel (complex fields: real,
+// imaginary). `weight` (default 1) scales the term. Each condition is one loss term drawing
+// its points from the `boundary` (faces) or `initial` batch.
+#pragma once
+
+#include <vector>
+
+#include "io/config.h"
+#include "solvers/residual.h"
+
+namespace nfield::solvers {
+
+std::vector<LossTerm> condition_terms(const io::ConfigNode& conditions, const Domain& domain,
+                                      int output_dim);
+
+// Per-channel expressions from a `value` entry (one string, or a list of output_dim).
+std::vector<io::Expression> channel_expressions(const io::ConfigNode& node, std::string_view key,
+                                                const Domain& domain, int output_dim);
+
+// Evaluates per-channel expressions at points: n × channels.
+Eigen::MatrixXd evaluate_channels(const std::vector<io::Expression>& expressions,
+                                  const Eigen::MatrixXd& points);
+
+}  // namespace nfield::solvers

@@ -1,0 +1,135 @@
+// SPDX-License-Identifier: MIT
+#include "solvers/domain.h"
+
+#include <stdexcept>
+
+#include "io/registry.h"
+
+namespace nfield::solvers {
+namespace {
+const char* const kAxes[] = {"x", "y", "z"};
+}
+
+std::string Face::name() const { return std::string(kAxes[axis]) + (upper ? "_max" : "_min"); }
+
+Domain::Domain(std::vector<double> lower, std::vector<double> upper,
+               std::optional<std::pair<double, double>> time)
+    : lower_(std::move(lower)), upper_(std::move(upper)), time_(time) {
+  if (lower_.empty() || lower_.size() > 3 || lower_.size() != upper_.size())
+    throw std::invalid_argument("domain: lower and upper need the same length, 1 to 3");
+  for (size_t i = 0; i < lower_.size(); ++i)
+    if (!(upper_[i] > lower_[i]))
+      throw std::invalid_argument("domain: upper[" + std::to_string(i) + "] must exceed lower");
+  if (time_ && !(time_->second > time_->first))
+    throw std::invalid_argument("domain: time interval must be increasing");
+}
+
+Domain Domain::from_config(const io::ConfigNode& node) {
+  const auto lower = node.get<std::vector<double>>("lower");
+  node.require("lower", !lower.empty() && lower.size() <= 3, "expected a list of 1 to 3 numbers");
+  const auto upper = node.get_list<double>("upper", lower.size());
+  for (size_t i = 0; i < lower.size(); ++i)
+    node.require("upper", upper[i] > lower[i],
+                 "upper[" + std::to_string(i) + "] must be greater than lower[" +
+                     std::to_string(i) + "]");
+  std::optional<std::pair<double, double>> time;
+  if (node.has("time")) {
+    const auto t = node.get_list<double>("time", 2);
+    node.require("time", t[1] > t[0], "expected [t0, t1] with t1 > t0");
+    time = std::pair{t[0], t[1]};
+  }
+  return Domain(lower, upper, time);
+}
+
+Eigen::VectorXd Domain::input_lower() const {
+  Eigen::VectorXd v(input_dim());
+  for (int i = 0; i < space_dim(); ++i) v(i) = lower_[i];
+  if (has_time()) v(time_column()) = time_->first;
+  return v;
+}
+
+Eigen::VectorXd Domain::input_upper() const {
+  Eigen::VectorXd v(input_dim());
+  for (int i = 0; i < space_dim(); ++i) v(i) = upper_[i];
+  if (has_time()) v(time_column()) = time_->second;
+  return v;
+}
+
+std::vector<std::string> Domain::input_names() const {
+  std::vector<std::string> names(kAxes, kAxes + space_dim());
+  if (has_time()) names.push_back("t");
+  return names;
+}
+
+std::vector<std::string> Domain::expression_variables() const {
+  std::vector<std::string> names = input_names();
+  for (const char* v : {"x", "y", "z", "t"})
+    if (std::find(names.begin(), names.end(), v) == names.end()) names.push_back(v);
+  return names;
+}
+
+std::vector<Face> Domain::faces() const {
+  std::vector<Face> out;
+  for (int a = 0; a < space_dim(); ++a) {
+    out.push_back({a, false});
+    out.push_back({a, true});
+  }
+  return out;
+}
+
+Face Domain::face(const std::string& name) const {
+  Registry<Face> names("face");
+  for (const Face& f : faces()) names.add(f.name(), f);
+  return names.at(name);
+}
+
+Eigen::MatrixXd Domain::sample_interior(Random& rng, Eigen::Index n) const {
+  const Eigen::VectorXd lo = input_lower(), hi = input_upper();
+  Eigen::MatrixXd x(n, input_dim());
+  for (Eigen::Index r = 0; r < n; ++r)
+    for (int c = 0; c < input_dim(); ++c) x(r, c) = lo(c) + (hi(c) - lo(c)) * uniform01(rng);
+  return x;
+}
+
+Eigen::MatrixXd Domain::sample_face(const Face& face, Random& rng, Eigen::Index n) const {
+  Eigen::MatrixXd x = sample_interior(rng, n);
+  x.col(face.axis).setConstant(face.upper ? upper_[face.axis] : lower_[face.axis]);
+  return x;
+}
+
+double Domain::face_measure(const Face& face) const {
+  double m = 1;
+  for (int a = 0; a < space_dim(); ++a)
+    if (a != face.axis) m *= upper_[a] - lower_[a];
+  return m;
+}
+
+Eigen::MatrixXd Domain::sample_faces(const std::vector<Face>& faces, Random& rng,
+                                     Eigen::Index n) const {
+  if (faces.empty()) throw std::invalid_argument("Domain::sample_faces: no faces");
+  std::vector<double> cumulative;
+  double total = 0;
+  for (const Face& f : faces) cumulative.push_back(total += face_measure(f));
+  Eigen::MatrixXd x = sample_interior(rng, n);
+  for (Eigen::Index r = 0; r < n; ++r) {
+    const double u = uniform01(rng) * total;
+    size_t k = 0;
+    while (k + 1 < faces.size() && u >= cumulative[k]) ++k;
+    x(r, faces[k].axis) = faces[k].upper ? upper_[faces[k].axis] : lower_[faces[k].axis];
+  }
+  return x;
+}
+
+Eigen::MatrixXd Domain::sample_initial(Random& rng, Eigen::Index n) const {
+  Eigen::MatrixXd x = sample_interior(rng, n);
+  if (has_time()) x.col(time_column()).setConstant(time_->first);
+  return x;
+}
+
+Eigen::VectorXd Domain::normal(const Face& face) const {
+  Eigen::VectorXd v = Eigen::VectorXd::Zero(input_dim());
+  v(face.axis) = face.upper ? 1.0 : -1.0;
+  return v;
+}
+
+}  // namespace nfield::solvers

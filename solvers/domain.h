@@ -1,0 +1,78 @@
+// SPDX-License-Identifier: MIT
+//
+// The domain of a problem: a box [lower, upper] in 1–3 space dimensions, optionally times a
+// time interval [t0, t1]. Field inputs are the space coordinates, then t:
+// (x), (x, y), (x, y, z), (x, t), (x, y, t), (x, y, z, t).
+//
+// Faces are named x_min, x_max, y_min, … ; "boundary" means all space faces, "initial" the
+// slice t = t0. Sampling draws from the caller's random engine only, so a run's points are
+// reproducible from its seed (and its saved engine state on resume).
+#pragma once
+
+#include <optional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "io/config.h"
+
+namespace nfield::solvers {
+
+using Random = std::mt19937_64;
+
+// Uniform in [0, 1), from the raw engine (independent of the library's distributions).
+inline double uniform01(Random& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
+
+struct Face {
+  int axis = 0;        // space axis
+  bool upper = false;  // x_max rather than x_min
+  std::string name() const;
+};
+
+class Domain {
+ public:
+  Domain(std::vector<double> lower, std::vector<double> upper,
+         std::optional<std::pair<double, double>> time = std::nullopt);
+  // Reads `domain:` {lower, upper, time}; errors name the file, line and key.
+  static Domain from_config(const io::ConfigNode& node);
+
+  int space_dim() const { return static_cast<int>(lower_.size()); }
+  bool has_time() const { return time_.has_value(); }
+  int input_dim() const { return space_dim() + (has_time() ? 1 : 0); }
+  int time_column() const { return space_dim(); }
+  const std::vector<double>& lower() const { return lower_; }
+  const std::vector<double>& upper() const { return upper_; }
+  std::pair<double, double> time() const { return time_.value_or(std::pair{0.0, 0.0}); }
+  // Input lower/upper including time.
+  Eigen::VectorXd input_lower() const;
+  Eigen::VectorXd input_upper() const;
+
+  // Expression variable order for io::Expression so that a point row (inputs) maps onto
+  // x, y, z, t by name: e.g. {"x", "t", "y", "z"} for 1D + time.
+  std::vector<std::string> expression_variables() const;
+  std::vector<std::string> input_names() const;
+
+  std::vector<Face> faces() const;
+  // Parses "x_min", …, case-insensitive; the error lists the valid names.
+  Face face(const std::string& name) const;
+
+  Eigen::MatrixXd sample_interior(Random& rng, Eigen::Index n) const;
+  // On one face (time uniform in [t0, t1] when present).
+  Eigen::MatrixXd sample_face(const Face& face, Random& rng, Eigen::Index n) const;
+  // On the union of `faces`, each chosen with probability ∝ its measure.
+  Eigen::MatrixXd sample_faces(const std::vector<Face>& faces, Random& rng, Eigen::Index n) const;
+  // At t = t0, space uniform.
+  Eigen::MatrixXd sample_initial(Random& rng, Eigen::Index n) const;
+
+  // Outward unit normal of a face (space components only, input_dim long, zero in t).
+  Eigen::VectorXd normal(const Face& face) const;
+
+ private:
+  double face_measure(const Face& face) const;
+  std::vector<double> lower_, upper_;
+  std::optional<std::pair<double, double>> time_;
+};
+
+}  // namespace nfield::solvers

@@ -1,0 +1,18 @@
+// SPDX-License-Identifier: MIT
+#include "solvers/problem.h"
+
+#include <stdexcept>
+
+namespace nfield::solvers {
+
+Eigen::MatrixXd Problem::exact(const Eigen::MatrixXd&) const {
+  throw std::logic_error("this problem has no exact solution");
+}
+
+Eigen::Array<bool, Eigen::Dynamic, 1> Problem::error_mask(const Eigen::MatrixXd& x) const {
+  return Eigen::Array<bool, Eigen::Dynamic, 1>::Constant(x.rows(), true);
+}
+
+void Problem::write_outputs(const OutputContext&, std::vector<std::pair<std::string, double>>&) const {}
+
+}  // namespace nfield::solvers

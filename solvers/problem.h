@@ -1,0 +1,58 @@
+// SPDX-License-Identifier: MIT
+//
+// A problem is one equation family (Poisson, Helmholtz, wave, Eikonal, …) read from the
+// `equation:` and `conditions:` sections of a config. It names the loss terms a trainer
+// lowers, and optionally an exact or reference solution for error metrics. Each family is
+// one file in solvers/ plus one line in register_problems() (problems.cc).
+#pragma once
+
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "io/config.h"
+#include "solvers/residual.h"
+
+namespace nfield::solvers {
+
+// What a problem writes besides the common outputs (grid, metrics).
+struct OutputContext {
+  std::filesystem::path dir;
+  // Values of the trained field at points (n × output_dim), in double.
+  std::function<Eigen::MatrixXd(const Eigen::MatrixXd&)> values;
+  std::vector<int> grid;  // output.grid
+};
+
+class Problem {
+ public:
+  virtual ~Problem() = default;
+  virtual const Domain& domain() const = 0;
+  virtual int output_dim() const { return 1; }
+  virtual std::vector<std::string> output_names() const { return {"u"}; }
+  virtual std::vector<LossTerm> loss_terms() const = 0;
+  // The loss term whose residual is written on the output grid (-1: none).
+  virtual int residual_term() const { return 0; }
+
+  virtual bool has_exact() const { return false; }
+  // Exact or reference solution at x (n × output_dim).
+  virtual Eigen::MatrixXd exact(const Eigen::MatrixXd& x) const;
+  // Which evaluation points count in error metrics (e.g. outside an absorbing layer).
+  virtual Eigen::Array<bool, Eigen::Dynamic, 1> error_mask(const Eigen::MatrixXd& x) const;
+
+  // Extra metrics (added to metrics.json) and files after training.
+  virtual void write_outputs(const OutputContext& context, std::vector<std::pair<std::string, double>>& metrics) const;
+};
+
+struct ProblemContext {
+  io::ConfigNode root;               // the whole config
+  std::filesystem::path config_dir;  // relative data paths resolve here
+};
+
+using ProblemFactory = std::function<std::unique_ptr<Problem>(const ProblemContext&)>;
+
+// The problem named by `problem:`; ConfigError lists the valid names.
+std::unique_ptr<Problem> make_problem(const ProblemContext& context);
+std::vector<std::string> problem_names();
+
+}  // namespace nfield::solvers

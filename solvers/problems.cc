@@ -1,0 +1,31 @@
+// SPDX-License-Identifier: MIT
+#include "solvers/problems.h"
+
+namespace nfield::solvers {
+
+void register_problems(Registry<ProblemFactory>& registry) {
+  registry.add("poisson", make_poisson);
+}
+
+namespace {
+const Registry<ProblemFactory>& problems() {
+  static const Registry<ProblemFactory> registry = [] {
+    Registry<ProblemFactory> r("problem");
+    register_problems(r);
+    return r;
+  }();
+  return registry;
+}
+}  // namespace
+
+std::unique_ptr<Problem> make_problem(const ProblemContext& context) {
+  const std::string name = context.root.get<std::string>("problem");
+  if (!problems().contains(name))
+    throw context.root.error("problem", "unknown problem '" + name + "' (valid: " +
+                                            problems().joined_names() + ")");
+  return problems().at(name)(context);
+}
+
+std::vector<std::string> problem_names() { return problems().names(); }
+
+}  // namespace nfield::solvers

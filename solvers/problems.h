@@ -1,0 +1,16 @@
+// SPDX-License-Identifier: MIT
+//
+// The factories of the registered problems, one per equation family (one file each).
+// register_problems() in problems.cc lists them; adding an equation adds one line there.
+#pragma once
+
+#include "io/registry.h"
+#include "solvers/problem.h"
+
+namespace nfield::solvers {
+
+std::unique_ptr<Problem> make_poisson(const ProblemContext& context);
+
+void register_problems(Registry<ProblemFactory>& registry);
+
+}  // namespace nfield::solvers

@@ -1,0 +1,63 @@
+// SPDX-License-Identifier: MIT
+#include "solvers/residual.h"
+
+#include <stdexcept>
+
+namespace nfield::solvers {
+
+LinearResidual::LinearResidual(std::vector<Term> terms, Eigen::MatrixXd source)
+    : terms_(std::move(terms)), source_(std::move(source)) {
+  for (const Term& t : terms_)
+    if (t.coefficient.size() != 1 && t.coefficient.size() != source_.rows())
+      throw std::invalid_argument("LinearResidual: a coefficient has " +
+                                  std::to_string(t.coefficient.size()) + " values for " +
+                                  std::to_string(source_.rows()) + " points");
+}
+
+void LinearResidual::evaluate(Eigen::Index first, const StreamLayout&, const Streams<double>& out,
+                              Eigen::MatrixXd& r) const {
+  const Eigen::Index n = out.points;
+  r = -source_.middleRows(first, n);
+  for (const Term& t : terms_) {
+    if (t.coefficient.size() == 1)
+      r.col(t.component) += t.coefficient(0) * out.stream(t.stream).col(t.channel);
+    else
+      r.col(t.component).array() +=
+          t.coefficient.segment(first, n).array() * out.stream(t.stream).col(t.channel).array();
+  }
+}
+
+void LinearResidual::backward(Eigen::Index first, const StreamLayout&, const Streams<double>& out,
+                              const Eigen::MatrixXd& r_bar, Streams<double>& adjoint) const {
+  const Eigen::Index n = out.points;
+  for (const Term& t : terms_) {
+    if (t.coefficient.size() == 1)
+      adjoint.stream(t.stream).col(t.channel) += t.coefficient(0) * r_bar.col(t.component);
+    else
+      adjoint.stream(t.stream).col(t.channel).array() +=
+          t.coefficient.segment(first, n).array() * r_bar.col(t.component).array();
+  }
+}
+
+template <typename Scalar>
+double ResidualLoss<Scalar>::evaluate(Eigen::Index first, const StreamLayout& layout,
+                                      const Streams<Scalar>& out, Streams<Scalar>& adjoint) const {
+  thread_local Streams<double> out_d, adjoint_d;
+  thread_local Eigen::MatrixXd r;
+  out_d.points = out.points;
+  out_d.count = out.count;
+  out_d.data = out.data.template cast<double>();
+  residual_.evaluate(first, layout, out_d, r);
+  adjoint_d.points = out.points;
+  adjoint_d.count = out.count;
+  adjoint_d.data.setZero(out.data.rows(), out.data.cols());
+  const Eigen::MatrixXd r_bar = (2.0 * scale_) * r;
+  residual_.backward(first, layout, out_d, r_bar, adjoint_d);
+  adjoint.data += adjoint_d.data.template cast<Scalar>();
+  return scale_ * r.squaredNorm();
+}
+
+template class ResidualLoss<float>;
+template class ResidualLoss<double>;
+
+}  // namespace nfield::solvers

@@ -1,0 +1,83 @@
+// SPDX-License-Identifier: MIT
+//
+// Residuals: per-point vectors r(x) computed from a field's output streams, and the loss
+// terms built from them, L = w · (1/N) Σₙ ‖r(xₙ)‖². Residuals work in double whatever the
+// training precision: they read and write only the output streams (width 1 or 2), so the
+// conversion costs nothing next to the network.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "autodiff/stream_loss.h"
+#include "solvers/domain.h"
+
+namespace nfield::solvers {
+
+using autodiff::StreamLayout;
+using autodiff::Streams;
+
+class Residual {
+ public:
+  virtual ~Residual() = default;
+  virtual int components() const = 0;
+  // r (out.points × components) for points [first, first + out.points) of the point set
+  // this residual was built for.
+  virtual void evaluate(Eigen::Index first, const StreamLayout& layout, const Streams<double>& out,
+                        Eigen::MatrixXd& r) const = 0;
+  // adjoint += ∂(Σ r̄ ⊙ r)/∂out.
+  virtual void backward(Eigen::Index first, const StreamLayout& layout, const Streams<double>& out,
+                        const Eigen::MatrixXd& r_bar, Streams<double>& adjoint) const = 0;
+};
+
+// r_c = Σₖ aₖ(x) · out[streamₖ][channelₖ] − f_c(x): every linear PDE and condition.
+class LinearResidual final : public Residual {
+ public:
+  struct Term {
+    int component = 0;
+    int stream = 0;
+    int channel = 0;
+    Eigen::VectorXd coefficient;  // one per point, or a single value for all
+  };
+  // source: points × components.
+  LinearResidual(std::vector<Term> terms, Eigen::MatrixXd source);
+
+  int components() const override { return static_cast<int>(source_.cols()); }
+  void evaluate(Eigen::Index first, const StreamLayout& layout, const Streams<double>& out,
+                Eigen::MatrixXd& r) const override;
+  void backward(Eigen::Index first, const StreamLayout& layout, const Streams<double>& out,
+                const Eigen::MatrixXd& r_bar, Streams<double>& adjoint) const override;
+
+ private:
+  std::vector<Term> terms_;
+  Eigen::MatrixXd source_;
+};
+
+// One term of the training loss: where its points come from, which streams it needs and
+// how its residual reads them.
+struct LossTerm {
+  std::string name;       // shown in progress lines and metrics.json ("pde", "dirichlet", …)
+  std::string batch_key;  // the training.batch entry giving its size: interior, boundary, …
+  double weight = 1.0;
+  autodiff::StreamSpec spec;
+  std::function<Eigen::MatrixXd(Random&, Eigen::Index)> sample;
+  std::function<std::unique_ptr<Residual>(const Eigen::MatrixXd& points)> residual;
+};
+
+// Adapts a residual on a point set to the autodiff StreamLoss: w/N Σ ‖r‖², r̄ = 2w r / N.
+template <typename Scalar>
+class ResidualLoss final : public autodiff::StreamLoss<Scalar> {
+ public:
+  ResidualLoss(const Residual& residual, double weight, Eigen::Index total_points)
+      : residual_(residual), scale_(weight / static_cast<double>(total_points)) {}
+  double evaluate(Eigen::Index first, const StreamLayout& layout, const Streams<Scalar>& out,
+                  Streams<Scalar>& adjoint) const override;
+
+ private:
+  const Residual& residual_;
+  double scale_;
+};
+
+}  // namespace nfield::solvers

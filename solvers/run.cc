@@ -1,0 +1,268 @@
+// SPDX-License-Identifier: MIT
+#include "solvers/run.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "fields/field_config.h"
+#include "fields/field_io.h"
+#include "io/atomic_write.h"
+#include "io/version.h"
+#include "solvers/grid_output.h"
+#include "solvers/trainer.h"
+
+namespace nfield::solvers {
+namespace {
+
+std::atomic<int> g_signal{0};
+extern "C" void on_signal(int signal) { g_signal.store(signal); }
+
+// Ctrl-C and SIGTERM end training cleanly; a second Ctrl-C kills as usual.
+class SignalGuard {
+ public:
+  SignalGuard() {
+    g_signal.store(0);
+    struct sigaction action {};
+    action.sa_handler = on_signal;
+    action.sa_flags = SA_RESETHAND;
+    sigemptyset(&action.sa_mask);
+    sigaction(SIGINT, &action, &old_int_);
+    sigaction(SIGTERM, &action, &old_term_);
+  }
+  ~SignalGuard() {
+    sigaction(SIGINT, &old_int_, nullptr);
+    sigaction(SIGTERM, &old_term_, nullptr);
+  }
+
+ private:
+  struct sigaction old_int_ {}, old_term_ {};
+};
+
+OutputOptions output_options(const io::ConfigNode& node, const Domain& domain,
+                             const std::filesystem::path& config,
+                             const std::filesystem::path& out_override) {
+  OutputOptions o;
+  o.dir = node.get_or("dir", ("out/" + config.stem().string()));
+  if (!out_override.empty()) o.dir = out_override;
+  const int d = domain.space_dim();
+  const int fallback = d == 1 ? 256 : d == 2 ? 128 : 48;
+  o.grid.assign(d, fallback);
+  if (node.has("grid")) {
+    o.grid = node.get_list<int>("grid", static_cast<std::size_t>(d));
+    for (int g : o.grid) node.require("grid", g >= 2 && g <= 4096, "expected point counts in [2, 4096]");
+  }
+  if (node.has("frames")) o.frames = node.get_in_range("frames", 1, 10000);
+  o.png = node.get_or("png", true);
+  node.reject_unknown_keys();
+  return o;
+}
+
+YAML::Node output_yaml(const OutputOptions& o) {
+  YAML::Node n;
+  n["dir"] = o.dir.string();
+  n["grid"] = o.grid;
+  n["frames"] = o.frames;
+  n["png"] = o.png;
+  return n;
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+}
+
+// A terminal gets one line redrawn in place; a pipe or file gets a line every log_every steps.
+class ProgressPrinter {
+ public:
+  explicit ProgressPrinter(int log_every) : log_every_(log_every), tty_(isatty(fileno(stdout))) {}
+  ~ProgressPrinter() { finish(); }
+  void operator()(const Progress& p) {
+    const bool last = p.step == p.total_steps;
+    if (tty_) {
+      const auto now = std::chrono::steady_clock::now();
+      if (!last && now - shown_ < std::chrono::milliseconds(100)) return;
+      shown_ = now;
+    } else if (p.step % log_every_ != 0 && !last && p.step != 1) {
+      return;
+    }
+    std::string terms;
+    for (size_t k = 0; k < p.term_names.size(); ++k) {
+      char buffer[96];
+      std::snprintf(buffer, sizeof buffer, " %s %.3e", p.term_names[k].c_str(), p.term_losses[k]);
+      terms += buffer;
+    }
+    std::printf("%sstep %ld/%ld [%s] loss %.3e |%s | %.1f steps/s, ETA %.0f s%s", tty_ ? "\r\033[K" : "",
+                p.step, p.total_steps, p.optimizer.c_str(), p.loss, terms.c_str(),
+                p.steps_per_second, p.eta_seconds, tty_ ? "" : "\n");
+    std::fflush(stdout);
+    open_line_ = tty_;
+  }
+  void finish() {
+    if (open_line_) std::printf("\n");
+    open_line_ = false;
+  }
+
+ private:
+  int log_every_;
+  bool tty_;
+  bool open_line_ = false;
+  std::chrono::steady_clock::time_point shown_{};
+};
+
+template <typename Scalar>
+StreamEvaluator evaluator(const fields::Field<Scalar>& field) {
+  return [&field](const autodiff::StreamLayout& layout, const Eigen::MatrixXd& x) {
+    autodiff::Streams<Scalar> out;
+    field.evaluate(layout, x.cast<Scalar>(), out);
+    autodiff::Streams<double> result;
+    result.points = out.points;
+    result.count = out.count;
+    result.data = out.data.template cast<double>();
+    return result;
+  };
+}
+
+template <typename Scalar>
+void write_checkpoint(const std::filesystem::path& path, const fields::Field<Scalar>& field,
+                      const Trainer<Scalar>& trainer, const std::string& config_text) {
+  io::H5Writer file(path);
+  fields::save_field(file, field);
+  trainer.save_state(file);
+  file.write_attribute("/", "config", config_text);
+  file.write_attribute("/", "nfield_version", std::string(version()));
+  file.commit();
+}
+
+template <typename Scalar>
+int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
+  const std::filesystem::path dir = setup.output.dir;
+  const std::string config_text = io::to_yaml(setup.resolved);
+  fields::Field<Scalar> field(setup.field);
+  Trainer<Scalar> trainer(*setup.problem, field, setup.training);
+  if (!resume.empty()) {
+    const io::H5Reader file(resume);
+    const fields::Field<Scalar> saved = fields::load_field<Scalar>(file);
+    if (saved.parameter_count() != field.parameter_count())
+      throw std::runtime_error(resume.string() + ": its field has " +
+                               std::to_string(saved.parameter_count()) +
+                               " parameters, the config's has " +
+                               std::to_string(field.parameter_count()));
+    field.parameters() = saved.parameters();
+    trainer.load_state(file);
+    std::printf("resuming from %s at step %ld\n", resume.string().c_str(), trainer.step());
+  }
+  std::filesystem::create_directories(dir);
+  io::write_atomically(dir / "config.yaml", [&](const std::filesystem::path& p) {
+    std::ofstream(p) << config_text << "\n";
+  });
+
+  const auto started = std::chrono::steady_clock::now();
+  bool finished;
+  {
+    SignalGuard guard;
+    ProgressPrinter printer(setup.training.log_every);
+    typename Trainer<Scalar>::Callbacks callbacks;
+    callbacks.stop_requested = [] { return g_signal.load() != 0; };
+    callbacks.progress = [&printer](const Progress& p) { printer(p); };
+    callbacks.checkpoint = [&] { write_checkpoint(dir / "checkpoint.h5", field, trainer, config_text); };
+    finished = trainer.run(callbacks);
+  }
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  if (!finished) std::printf("\ninterrupted at step %ld: writing the checkpoint and outputs\n", trainer.step());
+  write_checkpoint(dir / "checkpoint.h5", field, trainer, config_text);
+
+  const GridMetrics grid = write_grid_outputs(*setup.problem, evaluator(field), setup.output);
+  std::vector<std::pair<std::string, double>> extra;
+  OutputContext context{dir, [&field](const Eigen::MatrixXd& x) {
+                          return field.values(x.cast<Scalar>()).template cast<double>().eval();
+                        },
+                        setup.output.grid};
+  setup.problem->write_outputs(context, extra);
+
+  nlohmann::ordered_json metrics;
+  metrics["problem"] = setup.root.get<std::string>("problem");
+  metrics["finished"] = finished;
+  metrics["steps"] = trainer.step();
+  metrics["wall_s"] = wall;
+  metrics["step_ms_median"] = median(trainer.step_milliseconds());
+  metrics["precision"] = setup.training.precision;
+  metrics["parameters"] = field.parameter_count();
+  double loss = 0;
+  for (size_t k = 0; k < trainer.term_names().size(); ++k) {
+    metrics["losses"][trainer.term_names()[k]] = trainer.term_losses()[k];
+    loss += trainer.term_losses()[k];
+  }
+  metrics["loss"] = loss;
+  metrics["stage_losses"] = trainer.stage_losses();
+  if (grid.has_error) {
+    metrics["rel_l2"] = grid.rel_l2;
+    metrics["max_abs_err"] = grid.max_abs_err;
+  }
+  metrics["residual_rms"] = grid.residual_rms;
+  for (const auto& [key, value] : extra) metrics[key] = value;
+  metrics["nfield_version"] = std::string(version());
+  io::write_atomically(dir / "metrics.json", [&](const std::filesystem::path& p) {
+    std::ofstream(p) << metrics.dump(2) << "\n";
+  });
+  std::printf("wrote %s (steps %ld, %.1f s", dir.string().c_str(), trainer.step(), wall);
+  if (grid.has_error) std::printf(", rel_l2 %.3e, max_abs_err %.3e", grid.rel_l2, grid.max_abs_err);
+  std::printf(")\n");
+  return finished ? 0 : 130;
+}
+
+}  // namespace
+
+RunSetup load_run(const std::filesystem::path& config, const std::vector<std::string>& overrides,
+                  const std::filesystem::path& out_dir_override) {
+  RunSetup s{config, io::load_config(config, overrides)};
+  s.root.get_choice("problem", problem_names());
+  s.problem = make_problem({s.root, config.parent_path()});
+  s.training = TrainingOptions::from_config(s.root.child_or_empty("training"));
+  s.field = fields::field_options_from_config(s.root.child_or_empty("field"),
+                                              s.problem->domain().input_dim(),
+                                              s.problem->output_dim(), s.training.seed);
+  s.output = output_options(s.root.child_or_empty("output"), s.problem->domain(), config,
+                            out_dir_override);
+  for (const LossTerm& term : s.problem->loss_terms())
+    if (!s.training.batch.count(term.batch_key))
+      throw s.root.child_or_empty("training").error(
+          "batch", "needs an entry '" + term.batch_key + "' for the loss term '" + term.name + "'");
+  s.root.child_or_empty("training").reject_unknown_keys();
+  s.root.reject_unknown_keys_recursive();
+  s.resolved = YAML::Clone(s.root.yaml());
+  s.resolved["training"] = s.training.to_yaml();
+  s.resolved["field"] = fields::to_yaml(s.field);
+  s.resolved["output"] = output_yaml(s.output);
+  return s;
+}
+
+int execute_run(RunSetup& setup, const std::filesystem::path& resume) {
+  return setup.training.precision == "double" ? train_and_write<double>(setup, resume)
+                                              : train_and_write<float>(setup, resume);
+}
+
+void evaluate_checkpoint(const std::filesystem::path& checkpoint, int grid_points,
+                         const std::filesystem::path& out_dir) {
+  const io::H5Reader file(checkpoint);
+  const std::string config_text = file.read_attribute<std::string>("/", "config");
+  const std::filesystem::path config_copy = out_dir / "config.yaml";
+  std::filesystem::create_directories(out_dir);
+  io::write_atomically(config_copy, [&](const std::filesystem::path& p) { std::ofstream(p) << config_text; });
+  RunSetup setup = load_run(config_copy, {}, out_dir);
+  setup.output.grid.assign(setup.problem->domain().space_dim(), grid_points);
+  const fields::Field<double> field = fields::load_field<double>(file);
+  const GridMetrics grid = write_grid_outputs(*setup.problem, evaluator(field), setup.output);
+  std::printf("wrote %s", out_dir.string().c_str());
+  if (grid.has_error) std::printf(" (rel_l2 %.3e, max_abs_err %.3e)", grid.rel_l2, grid.max_abs_err);
+  std::printf("\n");
+}
+
+}  // namespace nfield::solvers

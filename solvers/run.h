@@ -1,0 +1,61 @@
+// SPDX-License-Identifier: MIT
+//
+// One run of a config: read and check everything first (so a bad config writes nothing),
+// then train, then write the outputs into output.dir:
+//
+//   config.yaml      the config as resolved, every default filled in
+//   checkpoint.h5    field (see fields/field_io.h), trainer state, config text
+//   solution.vti     u, grad_u, residual, exact, error on output.grid (time-dependent
+//                    problems: solution.pvd over frames frame_KKKK.vti)
+//   solution.png     preview of u (2D, or the middle slice of 3D / the first frame)
+//   metrics.json     problem, steps, wall_s, step_ms_median, losses, rel_l2, max_abs_err, …
+//
+// The `output:` section:
+//   output:
+//     dir: out/NAME        # default: out/ + the config file's stem
+//     grid: [128, 128]     # points per space axis (default 256 in 1D, 128 in 2D, 48 in 3D)
+//     frames: 11           # time-dependent problems: frames over [t0, t1]
+//     png: true
+#pragma once
+
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "fields/field.h"
+#include "solvers/problem.h"
+#include "solvers/training_options.h"
+
+namespace nfield::solvers {
+
+struct OutputOptions {
+  std::filesystem::path dir;
+  std::vector<int> grid;
+  int frames = 11;
+  bool png = true;
+};
+
+struct RunSetup {
+  std::filesystem::path config_path;
+  io::ConfigNode root;
+  std::unique_ptr<Problem> problem;
+  fields::FieldOptions field;
+  TrainingOptions training;
+  OutputOptions output;
+  YAML::Node resolved;  // the config with defaults filled in
+};
+
+// Reads and checks a config (and `--set` overrides). Throws io::ConfigError.
+RunSetup load_run(const std::filesystem::path& config, const std::vector<std::string>& overrides,
+                  const std::filesystem::path& out_dir_override = {});
+
+// Trains and writes the outputs. Returns 0 when finished, 130 when interrupted by a signal
+// (outputs and checkpoint of the state reached are still written).
+int execute_run(RunSetup& setup, const std::filesystem::path& resume = {});
+
+// Samples a checkpoint's field onto a grid and writes VTK (nfield eval).
+void evaluate_checkpoint(const std::filesystem::path& checkpoint, int grid_points,
+                         const std::filesystem::path& out_dir);
+
+}  // namespace nfield::solvers

@@ -1,0 +1,56 @@
+// SPDX-License-Identifier: MIT
+//
+// The `training:` section of a config, with its defaults:
+//
+//   training:
+//     seed: 0                      # weights, encodings and sample points
+//     precision: float             # float | double
+//     threads: 0                   # 0: all cores
+//     block: 128                   # points per block of the chunked passes
+//     batch: {interior: 4096, boundary: 1024, initial: 1024}   # points per loss term kind
+//     resample_every: 1            # new points every k Adam steps (L-BFGS keeps its points)
+//     log_every: 100               # progress lines when the output is not a terminal
+//     checkpoint_every: 0          # steps between checkpoints (0: at the end and on Ctrl-C)
+//     stages:
+//       - {optimizer: adam, steps: 2000, lr: 1.0e-3, schedule: cosine, lr_final: 1.0e-5}
+//       - {optimizer: lbfgs, steps: 500}
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "io/config.h"
+
+namespace nfield::solvers {
+
+struct StageOptions {
+  std::string optimizer = "adam";    // adam | lbfgs
+  int steps = 1000;
+  double lr = 1e-3;                  // adam: initial learning rate
+  std::string schedule = "constant"; // adam: constant | cosine | exponential
+  double lr_final = 1e-5;            // adam: learning rate at the last step (cosine, exponential)
+  int memory = 20;                   // lbfgs: history length
+
+  // The Adam learning rate at step `step` (0-based) of this stage.
+  double learning_rate(int step) const;
+};
+
+struct TrainingOptions {
+  std::uint64_t seed = 0;
+  std::string precision = "float";
+  int threads = 0;
+  long block = 128;
+  std::map<std::string, long> batch{{"interior", 4096}, {"boundary", 1024}, {"initial", 1024}};
+  int resample_every = 1;
+  int log_every = 100;
+  int checkpoint_every = 0;
+  std::vector<StageOptions> stages{StageOptions{}};
+
+  int total_steps() const;
+  static TrainingOptions from_config(const io::ConfigNode& node);
+  YAML::Node to_yaml() const;
+};
+
+}  // namespace nfield::solvers

@@ -1,0 +1,178 @@
+// SPDX-License-Identifier: MIT
+//
+// The activation, encoding and field-type registries: unknown names are rejected with a
+// message listing every valid name, names match case-insensitively; option validation names
+// the offending field.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+
+#include "fields/activations.h"
+#include "fields/encodings.h"
+#include "fields/field.h"
+#include "io/registry.h"
+
+namespace nfield::fields {
+namespace {
+
+std::string message_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "no std::invalid_argument thrown";
+  return "";
+}
+
+void expect_lists(const std::string& message, const std::vector<std::string>& names) {
+  ASSERT_FALSE(names.empty());
+  for (const std::string& name : names)
+    EXPECT_NE(message.find(name), std::string::npos) << "'" << message << "' lacks " << name;
+}
+
+TEST(ActivationRegistry, NamesAreSortedLowerCaseAndComplete) {
+  const std::vector<std::string> names = activation_names();
+  EXPECT_TRUE(std::is_sorted(names.begin(), names.end()));
+  for (const std::string& name : names) EXPECT_EQ(name, Registry<int>::lower(name));
+  for (const char* documented : {"identity", "relu", "sine", "softplus", "tanh"})
+    EXPECT_NE(std::find(names.begin(), names.end(), documented), names.end()) << documented;
+}
+
+TEST(ActivationRegistry, UnknownNameListsValidNames) {
+  const std::string message = message_of([] { make_activation<double>({"swish", 1.0}); });
+  EXPECT_NE(message.find("unknown activation 'swish'"), std::string::npos) << message;
+  expect_lists(message, activation_names());
+  EXPECT_THROW(make_activation<float>({"swish", 1.0}), UnknownNameError);
+}
+
+TEST(ActivationRegistry, NamesAreCaseInsensitive) {
+  for (const char* name : {"SiNe", "SINE", "sine"}) {
+    const auto f = make_activation<double>({name, 2.0});
+    std::vector<Eigen::MatrixXd> tables;
+    f->derivatives(Eigen::MatrixXd::Constant(1, 1, 0.3), 1, tables);
+    EXPECT_DOUBLE_EQ(tables[0](0, 0), std::sin(0.6)) << name;
+    EXPECT_DOUBLE_EQ(tables[1](0, 0), 2 * std::cos(0.6)) << name;
+    EXPECT_NE(make_activation<float>({name, 2.0}), nullptr);
+  }
+  EXPECT_NE(make_activation<double>({"TanH", 1.0}), nullptr);
+}
+
+TEST(EncodingRegistry, UnknownNameListsValidNames) {
+  EncodingOptions o;
+  o.type = "hashgrid2";
+  const std::string message = message_of([&] { o.validate(); });
+  EXPECT_NE(message.find("unknown encoding 'hashgrid2'"), std::string::npos) << message;
+  expect_lists(message, encoding_names());
+  expect_lists(message_of([&] { encoding_matrix(o, 2); }), encoding_names());
+}
+
+TEST(EncodingRegistry, NamesAreCaseInsensitive) {
+  EncodingOptions o;
+  o.type = "PosItional";
+  o.frequencies = 2;
+  EXPECT_NO_THROW(o.validate());
+  const Eigen::MatrixXd b = encoding_matrix(o, 2);
+  ASSERT_EQ(b.rows(), 4);
+  EXPECT_DOUBLE_EQ(b(3, 1), 2 * std::numbers::pi);  // row l·d + i holds 2ˡ π eᵢ
+  o.type = "FOURIER";
+  o.features = 5;
+  EXPECT_EQ(encoding_matrix(o, 3).rows(), 5);
+  o.type = "Identity";
+  EXPECT_EQ(encoding_matrix(o, 3).rows(), 0);
+}
+
+TEST(EncodingOptions, ValidationNamesTheField) {
+  EncodingOptions o;
+  o.type = "positional";
+  o.frequencies = 0;
+  EXPECT_NE(message_of([&] { o.validate(); }).find("encoding.frequencies"), std::string::npos);
+  o = {};
+  o.type = "fourier";
+  o.features = 0;
+  EXPECT_NE(message_of([&] { o.validate(); }).find("encoding.features"), std::string::npos);
+  o.features = 4;
+  o.scale = 0;
+  EXPECT_NE(message_of([&] { o.validate(); }).find("encoding.scale"), std::string::npos);
+}
+
+TEST(FieldRegistry, UnknownTypeAndActivationListValidNames) {
+  FieldOptions o;
+  o.type = "kan";
+  std::string message = message_of([&] { o.validate(); });
+  EXPECT_NE(message.find("unknown field type 'kan'"), std::string::npos) << message;
+  expect_lists(message, field_type_names());
+
+  o = {};
+  o.type = "mlp";
+  o.activation = "gelu";
+  message = message_of([&] { Field<double> f(o); });
+  EXPECT_NE(message.find("field.activation"), std::string::npos) << message;
+  expect_lists(message, activation_names());
+}
+
+TEST(FieldRegistry, NamesAreCaseInsensitive) {
+  FieldOptions o;
+  o.type = "SIREN";
+  o.hidden = {4};
+  EXPECT_NO_THROW(Field<double>{o});
+  o.type = "Mlp";
+  o.activation = "SiNe";
+  o.encoding.type = "Fourier";
+  o.encoding.features = 3;
+  const Field<double> f(o);
+  EXPECT_EQ(f.encoding_matrix().rows(), 3);
+}
+
+TEST(FieldOptions, ValidationNamesTheField) {
+  auto expect_field = [](const FieldOptions& o, const std::string& field) {
+    const std::string message = message_of([&] { o.validate(); });
+    EXPECT_NE(message.find(field), std::string::npos) << "'" << message << "' lacks " << field;
+  };
+  FieldOptions o;
+  o.input_dim = 5;
+  expect_field(o, "field.input_dim");
+  o = {};
+  o.output_dim = 0;
+  expect_field(o, "field.output_dim");
+  o = {};
+  o.hidden = {};
+  expect_field(o, "field.hidden");
+  o = {};
+  o.hidden = {8, 0};
+  expect_field(o, "field.hidden[1]");
+  o = {};
+  o.first_omega = 0;
+  expect_field(o, "field.first_omega");
+  o = {};
+  o.hidden_omega = -1;
+  expect_field(o, "field.hidden_omega");
+  o = {};
+  o.encoding.type = "positional";
+  o.encoding.frequencies = 30;
+  expect_field(o, "encoding.frequencies");
+}
+
+TEST(Registry, RejectsDuplicatesAndMatchesCaseInsensitively) {
+  Registry<int> r("widget");
+  r.add("Alpha", 1);
+  r.add("beta", 2);
+  EXPECT_THROW(r.add("ALPHA", 3), std::logic_error);
+  EXPECT_TRUE(r.contains("aLpHa"));
+  EXPECT_EQ(r.at("BETA"), 2);
+  EXPECT_EQ(r.names(), (std::vector<std::string>{"alpha", "beta"}));
+  try {
+    r.at("gamma");
+    ADD_FAILURE() << "no exception";
+  } catch (const UnknownNameError& e) {
+    EXPECT_EQ(std::string(e.what()), "unknown widget 'gamma' (valid: alpha, beta)");
+  }
+}
+
+}  // namespace
+}  // namespace nfield::fields

@@ -1,0 +1,292 @@
+// SPDX-License-Identifier: MIT
+//
+// A reference evaluator of fields::Field written independently of autodiff/: it reads the
+// flat parameter vector of a Field<double> and evaluates the network on any scalar type,
+// in particular nested ceres::Jet, one point at a time. The tests compare the derivative
+// streams of the library against it.
+//
+// Layout read (fields/field.h, fields/dense.h, fields/encodings.h):
+//   encoding   [x if positional and include_input, sin(x Bᵀ), cos(x Bᵀ)], B = encoding_matrix()
+//   hidden l   z = W a + b (W out × in column-major, then b), y = σ_l(z)
+//              siren: σ_l = sin(ω_l ·), ω_0 = first_omega, ω_l = hidden_omega for l > 0
+//              mlp:   σ_l = `activation` (sine with frequency hidden_omega)
+//   output     z = W a + b
+//
+// Activations known here are written in closed form with ceres' jet functions. An activation
+// registered later and not known here is applied through the library's own derivative
+// tables σ⁽ᵐ⁾(z⁰) by its (exact, since nilpotent) Taylor expansion on the jet; the tables
+// themselves are checked against finite differences in activation_tables_test.cc, so such
+// an activation is still fully tested without new test code.
+#pragma once
+
+#include <ceres/jet.h>
+
+#include <cmath>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "fields/activations.h"
+#include "fields/field.h"
+#include "io/registry.h"
+
+namespace nfield::testutil {
+
+// ---------------------------------------------------------------------------------------
+// Nested jets.
+
+template <typename T>
+struct JetInfo {
+  static constexpr bool is_jet = false;
+  static constexpr int depth = 0;
+};
+template <typename T, int N>
+struct JetInfo<ceres::Jet<T, N>> {
+  static constexpr bool is_jet = true;
+  static constexpr int depth = 1 + JetInfo<T>::depth;
+  using Inner = T;
+};
+
+// The constant c as a (nested) jet: every infinitesimal part zero.
+template <typename T>
+T constant(double c) {
+  if constexpr (!JetInfo<T>::is_jet) {
+    return static_cast<T>(c);
+  } else {
+    using Inner = typename JetInfo<T>::Inner;
+    T r;
+    r.a = constant<Inner>(c);
+    for (int i = 0; i < r.v.size(); ++i) r.v[i] = constant<Inner>(0.0);
+    return r;
+  }
+}
+
+// The real part of a (nested) jet.
+template <typename T>
+double value_of(const T& x) {
+  if constexpr (!JetInfo<T>::is_jet) {
+    return static_cast<double>(x);
+  } else {
+    return value_of(x.a);
+  }
+}
+
+// τ as a nested jet of one variable at every level (N = 1): τ = τ₁ + … + τ_D, so the part
+// ∂ᴰ/∂τ₁…∂τ_D of f(τ) is f⁽ᴰ⁾. Seeded at value v.
+template <typename T>
+T taylor_variable(double v) {
+  if constexpr (!JetInfo<T>::is_jet) {
+    return static_cast<T>(v);
+  } else {
+    using Inner = typename JetInfo<T>::Inner;
+    T r = constant<T>(0.0);
+    r.a = taylor_variable<Inner>(v);
+    r.v[0] = constant<Inner>(1.0);
+    return r;
+  }
+}
+
+// dᵏ/dτᵏ of y(τ) for y built from taylor_variable, k ≤ depth.
+template <typename T>
+double taylor_derivative(const T& y, int k) {
+  if constexpr (!JetInfo<T>::is_jet) {
+    if (k != 0) throw std::logic_error("taylor_derivative: order above the jet depth");
+    return static_cast<double>(y);
+  } else {
+    return k == 0 ? value_of(y) : taylor_derivative(y.v[0], k - 1);
+  }
+}
+
+// σ(z) on a (nested) jet from the derivative tables σ⁽ᵐ⁾(z⁰): with δ = z − z⁰ nilpotent of
+// index depth + 1, σ(z) = Σ_{m ≤ depth} σ⁽ᵐ⁾(z⁰) δᵐ / m! exactly.
+template <typename T>
+T apply_tables(const autodiff::ElementwiseFunction<double>& f, const T& z) {
+  constexpr int depth = JetInfo<T>::depth;
+  Eigen::MatrixXd z0(1, 1);
+  z0(0, 0) = value_of(z);
+  std::vector<Eigen::MatrixXd> tables;
+  f.derivatives(z0, depth, tables);
+  const T delta = z - constant<T>(z0(0, 0));
+  T power = constant<T>(1.0), out = constant<T>(tables[0](0, 0));
+  double factorial = 1;
+  for (int m = 1; m <= depth; ++m) {
+    power = power * delta;
+    factorial *= m;
+    out = out + constant<T>(tables[m](0, 0) / factorial) * power;
+  }
+  return out;
+}
+
+// tanh, the logistic sigmoid and softplus on nested jets of any depth (ceres' own tanh and
+// log1p construct T(1.0) from a double, which fails for jets nested more than twice).
+template <typename T>
+T jet_tanh(const T& z) {
+  if constexpr (!JetInfo<T>::is_jet) {
+    return std::tanh(z);
+  } else {
+    using Inner = typename JetInfo<T>::Inner;
+    const Inner t = jet_tanh(z.a);
+    const Inner slope = constant<Inner>(1.0) - t * t;
+    T r = constant<T>(0.0);
+    r.a = t;
+    for (int i = 0; i < r.v.size(); ++i) r.v[i] = slope * z.v[i];
+    return r;
+  }
+}
+template <typename T>
+T jet_sigmoid(const T& z) {
+  if constexpr (!JetInfo<T>::is_jet) {
+    return 1.0 / (1.0 + std::exp(-z));
+  } else {
+    using Inner = typename JetInfo<T>::Inner;
+    const Inner s = jet_sigmoid(z.a);
+    const Inner slope = s * (constant<Inner>(1.0) - s);
+    T r = constant<T>(0.0);
+    r.a = s;
+    for (int i = 0; i < r.v.size(); ++i) r.v[i] = slope * z.v[i];
+    return r;
+  }
+}
+template <typename T>
+T jet_softplus(const T& z) {
+  if constexpr (!JetInfo<T>::is_jet) {
+    return std::log1p(std::exp(z));  // |z| stays moderate in the tests
+  } else {
+    using Inner = typename JetInfo<T>::Inner;
+    const Inner slope = jet_sigmoid(z.a);
+    T r = constant<T>(0.0);
+    r.a = jet_softplus(z.a);
+    for (int i = 0; i < r.v.size(); ++i) r.v[i] = slope * z.v[i];
+    return r;
+  }
+}
+
+// σ in closed form for the activations this header knows; `known` tells whether it did.
+template <typename T>
+T closed_form_activation(const std::string& name, double omega, const T& z, bool* known) {
+  using std::sin;
+  *known = true;
+  if (name == "sine") return sin(constant<T>(omega) * z);
+  if (name == "tanh") return jet_tanh(z);
+  if (name == "softplus") return jet_softplus(z);
+  if (name == "relu") return value_of(z) > 0 ? z : constant<T>(0.0);
+  if (name == "identity") return z;
+  *known = false;
+  return z;
+}
+
+inline bool knows_activation(const std::string& name) {
+  bool known = false;
+  closed_form_activation<double>(Registry<int>::lower(name), 1.0, 0.0, &known);
+  return known;
+}
+
+class ReferenceField {
+ public:
+  ReferenceField(fields::FieldOptions options, Eigen::VectorXd parameters,
+                 Eigen::MatrixXd encoding)
+      : options_(std::move(options)),
+        parameters_(std::move(parameters)),
+        encoding_(std::move(encoding)) {
+    siren_ = Registry<int>::lower(options_.type) == "siren";
+    include_input_ = encoding_.rows() == 0 ||
+                     (Registry<int>::lower(options_.encoding.type) == "positional" &&
+                      options_.encoding.include_input);
+    Eigen::Index width = (include_input_ ? options_.input_dim : 0) + 2 * encoding_.rows();
+    Eigen::Index count = 0;
+    for (int h : options_.hidden) {
+      count += h * width + h;
+      width = h;
+    }
+    count += options_.output_dim * width + options_.output_dim;
+    if (count != parameters_.size())
+      throw std::logic_error("ReferenceField: layout needs " + std::to_string(count) +
+                             " parameters, the field has " + std::to_string(parameters_.size()));
+    for (size_t l = 0; l < options_.hidden.size(); ++l) {
+      fields::ActivationSpec spec = activation(l);
+      tables_.push_back(fields::make_activation<double>(spec));
+    }
+  }
+
+  explicit ReferenceField(const fields::Field<double>& field)
+      : ReferenceField(field.options(), field.parameters(), field.encoding_matrix()) {}
+
+  int input_dim() const { return options_.input_dim; }
+  int output_dim() const { return options_.output_dim; }
+  const Eigen::VectorXd& parameters() const { return parameters_; }
+  ReferenceField with_parameters(Eigen::VectorXd p) const {
+    return ReferenceField(options_, std::move(p), encoding_);
+  }
+
+  // The activation of hidden layer l as the field builds it.
+  fields::ActivationSpec activation(size_t l) const {
+    if (siren_) return {"sine", l == 0 ? options_.first_omega : options_.hidden_omega};
+    return {Registry<int>::lower(options_.activation), options_.hidden_omega};
+  }
+
+  // f(x): output_dim values.
+  template <typename T>
+  std::vector<T> evaluate(const std::vector<T>& x) const {
+    return run<T>(x, nullptr);
+  }
+
+  // Pre-activations z of every hidden unit at x, for keeping finite differences away from
+  // ReLU kinks.
+  std::vector<double> preactivations(const std::vector<double>& x) const {
+    std::vector<double> z;
+    run<double>(x, &z);
+    return z;
+  }
+
+ private:
+  template <typename T>
+  std::vector<T> run(const std::vector<T>& x, std::vector<double>* pre) const {
+    using std::cos;
+    using std::sin;
+    const int d = options_.input_dim;
+    if (static_cast<int>(x.size()) != d) throw std::logic_error("ReferenceField: wrong input size");
+    std::vector<T> a;
+    if (include_input_) a = x;
+    if (encoding_.rows() > 0) {
+      std::vector<T> z(encoding_.rows(), constant<T>(0.0));
+      for (Eigen::Index r = 0; r < encoding_.rows(); ++r)
+        for (int c = 0; c < d; ++c) z[r] = z[r] + constant<T>(encoding_(r, c)) * x[c];
+      for (const T& zr : z) a.push_back(sin(zr));
+      for (const T& zr : z) a.push_back(cos(zr));
+    }
+    const double* p = parameters_.data();
+    auto dense = [&p](const std::vector<T>& in, Eigen::Index out_width) {
+      const Eigen::Index in_width = static_cast<Eigen::Index>(in.size());
+      std::vector<T> out(out_width);
+      for (Eigen::Index r = 0; r < out_width; ++r) {
+        T acc = constant<T>(p[out_width * in_width + r]);
+        for (Eigen::Index c = 0; c < in_width; ++c)
+          acc = acc + constant<T>(p[c * out_width + r]) * in[c];
+        out[r] = acc;
+      }
+      p += out_width * in_width + out_width;
+      return out;
+    };
+    for (size_t l = 0; l < options_.hidden.size(); ++l) {
+      std::vector<T> z = dense(a, options_.hidden[l]);
+      const fields::ActivationSpec spec = activation(l);
+      for (T& zr : z) {
+        if (pre) pre->push_back(value_of(zr));
+        bool known = false;
+        T y = closed_form_activation<T>(spec.name, spec.frequency, zr, &known);
+        zr = known ? y : apply_tables<T>(*tables_[l], zr);
+      }
+      a = std::move(z);
+    }
+    return dense(a, options_.output_dim);
+  }
+
+  fields::FieldOptions options_;
+  Eigen::VectorXd parameters_;
+  Eigen::MatrixXd encoding_;
+  bool siren_ = true, include_input_ = true;
+  std::vector<std::shared_ptr<autodiff::ElementwiseFunction<double>>> tables_;
+};
+
+}  // namespace nfield::testutil
