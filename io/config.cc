@@ -561,7 +561,7 @@ template std::vector<std::string> ConfigNode::get_list<std::string>(std::string_
 // ---- loading and overrides ----------------------------------------------------------
 
 ConfigNode parse_config(std::string_view text, std::string file_name,
-                        std::span<const std::string> overrides) {
+                        const std::vector<std::string>& overrides) {
   std::vector<YAML::Node> documents;
   try {
     documents = YAML::LoadAll(std::string(text));
@@ -582,7 +582,7 @@ ConfigNode parse_config(std::string_view text, std::string file_name,
 }
 
 ConfigNode load_config(const std::filesystem::path& path,
-                       std::span<const std::string> overrides) {
+                       const std::vector<std::string>& overrides) {
   const std::string file = path.string();
   const YAML::Mark nowhere = YAML::Mark::null_mark();
   std::error_code ec;

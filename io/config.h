@@ -89,8 +89,9 @@ concept ConfigValue =
 //
 // Getters that take a key require this node to be a mapping (an empty node counts as an
 // empty mapping). Numbers are read strictly: `1e-3`, `.inf` and `3` are numbers, `abc`
-// is not; an integer may be written `1e4` but not `1.5`. Booleans are true/false,
-// yes/no or on/off in any case.
+// is not; an integer may be written `1e4` but not `1.5`; quotes do not matter ("2.5" is
+// a number, 42 is also the string "42"). Booleans are true/false, yes/no or on/off in
+// any case.
 class ConfigNode {
  public:
   // Wraps `node`; `file` is used in messages only. Usually made by load_config.
@@ -204,10 +205,10 @@ class ConfigNode {
 // line:column). `overrides` are `--set` assignments (see apply_override), applied in
 // order after parsing.
 ConfigNode load_config(const std::filesystem::path& path,
-                       std::span<const std::string> overrides = {});
+                       const std::vector<std::string>& overrides = {});
 // The same for config text already in memory; `file_name` is used in messages.
 ConfigNode parse_config(std::string_view text, std::string file_name,
-                        std::span<const std::string> overrides = {});
+                        const std::vector<std::string>& overrides = {});
 
 // Applies one command-line override `key.path=value` to `root`:
 //   training.seed=3             a map key (created, with missing parents, if absent)

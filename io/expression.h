@@ -58,6 +58,8 @@ class Expression {
   // One value per row of `points`; column j holds variable j. Missing trailing columns
   // are 0 (a 2-D point sets x and y, with z = t = 0); more columns than variables is
   // std::invalid_argument. Division by zero and the like give inf/nan, not errors.
+  // Pitfall: an Eigen::Vector2d is two points of one column; pass a single point as a
+  // row (p.transpose()) or through the span overload.
   Eigen::VectorXd evaluate(const Eigen::Ref<const Eigen::MatrixXd>& points) const;
   // One point (variables in order, missing ones 0).
   double evaluate(std::span<const double> point) const;

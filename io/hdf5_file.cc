@@ -486,7 +486,11 @@ H5Reader::H5Reader(std::filesystem::path path) : impl_(std::make_unique<Impl>())
   std::error_code ec;
   if (!std::filesystem::exists(impl_->path, ec)) impl_->error("no such file");
   if (!std::filesystem::is_regular_file(impl_->path, ec)) impl_->error("not a regular file");
+#if H5_VERSION_GE(1, 12, 0)
+  const htri_t is_hdf5 = H5Fis_accessible(impl_->path.c_str(), H5P_DEFAULT);
+#else
   const htri_t is_hdf5 = H5Fis_hdf5(impl_->path.c_str());
+#endif
   H5Eclear2(H5E_DEFAULT);
   if (is_hdf5 <= 0) impl_->error("not an HDF5 file");
   impl_->file = checked(H5Fopen(impl_->path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose,

@@ -1,8 +1,10 @@
 // SPDX-License-Identifier: MIT
 #include "io/triangle_mesh.h"
 
+#include <cmath>
 #include <fstream>
 #include <regex>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -56,7 +58,8 @@ TriangleMesh read_off(const fs::path& path) {
   const bool normals = m[2].length() > 0;
   if (!parse_numbers(m[3].str(), v)) throw fail("unsupported OFF header (binary OFF?)");
   if (v.empty() && !next()) throw fail("missing vertex and face counts");
-  if (v.size() < 2 || v[0] < 0 || v[1] < 0) throw fail("expected vertex and face counts");
+  const auto count = [](double c) { return c >= 0 && c < 2e9 && c == std::floor(c); };
+  if (v.size() < 2 || !count(v[0]) || !count(v[1])) throw fail("expected vertex and face counts");
   const auto nv = static_cast<Eigen::Index>(v[0]), nf = static_cast<Eigen::Index>(v[1]);
   TriangleMesh mesh;
   mesh.vertices.resize(nv, 3);
@@ -71,14 +74,18 @@ TriangleMesh read_off(const fs::path& path) {
   std::vector<Eigen::Vector3i> triangles;
   for (Eigen::Index f = 0; f < nf; ++f) {
     if (!next()) throw fail("the file ends before face " + std::to_string(f));
-    const auto n = static_cast<std::size_t>(v[0]);
-    if (v[0] != static_cast<double>(n) || n < 3 || v.size() < n + 1)
+    if (!(v[0] >= 3 && v[0] == std::floor(v[0]) && v[0] < static_cast<double>(v.size())))
       throw fail("expected a vertex count of at least 3 and that many indices");
+    const auto n = static_cast<std::size_t>(v[0]);
     std::vector<int> ids(n);
     for (std::size_t j = 0; j < n; ++j) {
-      ids[j] = static_cast<int>(v[j + 1]);
-      if (ids[j] != v[j + 1] || ids[j] < 0 || ids[j] >= nv)
-        throw fail("vertex index " + std::to_string(v[j + 1]) + " out of range");
+      const double id = v[j + 1];
+      if (!(id >= 0 && id < static_cast<double>(nv) && id == std::floor(id))) {
+        std::ostringstream text;
+        text << "vertex index " << id << " is not one of 0.." << nv - 1;
+        throw fail(text.str());
+      }
+      ids[j] = static_cast<int>(id);
     }
     for (std::size_t j = 1; j + 1 < n; ++j) triangles.emplace_back(ids[0], ids[j], ids[j + 1]);
   }

@@ -15,7 +15,8 @@ namespace nfield::io {
 void write_vti(const std::filesystem::path& path, const Grid& grid, const PointArrays& arrays,
                Precision precision = Precision::kFloat64);
 
-// The grid and the numeric point arrays of a .vti file (any numeric type, read as double).
+// The grid and the numeric point arrays of a .vti file (any numeric type, read as double; a
+// direction matrix, if any, is ignored).
 // Throws std::runtime_error naming `path` when it is missing or not VTK image data.
 struct ImageData {
   Grid grid;

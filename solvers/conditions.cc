@@ -12,10 +12,15 @@ std::vector<io::Expression> channel_expressions(const io::ConfigNode& node, std:
     const io::ConfigNode list = node.child(key);
     node.require(key, static_cast<int>(list.size()) == output_dim,
                  "expected " + std::to_string(output_dim) + " expressions, one per output channel");
-    for (std::size_t c = 0; c < list.size(); ++c)
-      out.push_back(node.child(key).at(c).as<std::string>().empty()
-                        ? io::Expression("0", domain.expression_variables())
-                        : io::Expression(list.at(c).as<std::string>(), domain.expression_variables()));
+    for (std::size_t c = 0; c < list.size(); ++c) {
+      const io::ConfigNode element = list.at(c);
+      const std::string text = element.as<std::string>();
+      try {
+        out.push_back(io::Expression(text.empty() ? "0" : text, domain.expression_variables()));
+      } catch (const io::ExpressionError& e) {
+        throw element.error(e.what());  // a config error, located at the list element
+      }
+    }
     return out;
   }
   io::Expression e = node.get_expression(key, domain.expression_variables());
@@ -38,6 +43,7 @@ std::vector<Face> faces_of(const io::ConfigNode& item, const Domain& domain) {
     names = item.get<std::vector<std::string>>("on");
   else
     names = {item.get<std::string>("on")};
+  item.require("on", !names.empty(), "expected a face name or a non-empty list of face names");
   std::vector<Face> faces;
   for (const std::string& name : names) {
     if (Registry<int>::lower(name) == "boundary") {

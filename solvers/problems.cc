@@ -5,6 +5,10 @@ namespace nfield::solvers {
 
 void register_problems(Registry<ProblemFactory>& registry) {
   registry.add("poisson", make_poisson);
+  registry.add("wave", make_wave);
+  registry.add("helmholtz", make_helmholtz);
+  registry.add("eikonal", make_eikonal);
+  registry.add("sdf", make_sdf);
 }
 
 namespace {

@@ -51,7 +51,6 @@ void expect_error(F&& f, std::initializer_list<std::string> parts) {
     f();
     ADD_FAILURE() << "no exception";
   } catch (const E& e) {
-    std::cerr << "MSG: " << e.what() << "\n";
     for (const auto& p : parts)
       EXPECT_NE(std::string(e.what()).find(p), std::string::npos)
           << "'" << e.what() << "' lacks '" << p << "'";

@@ -136,7 +136,7 @@ TEST(PointCloud, Errors) {
   off.replace(off.find("4 0 3 2 1"), 9, "4 0 3 2 9");
   write_text(dir / "bad.off", off);
   expect_error<std::runtime_error>([&] { read_triangle_mesh(dir / "bad.off"); },
-                                   {"bad.off", "line 12", "out of range"});
+                                   {"bad.off", "line 12", "vertex index 9 is not one of 0..7"});
   write_text(dir / "short.off", "OFF\n8 6 0\n0 0 0\n");
   expect_error<std::runtime_error>([&] { read_triangle_mesh(dir / "short.off"); },
                                    {"short.off", "ends before vertex 1"});

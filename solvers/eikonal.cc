@@ -1,0 +1,358 @@
+// SPDX-License-Identifier: MIT
+//
+// Eikonal: first-arrival travel times u from a point source x₀ in a medium of speed v(x),
+//
+//   |∇u| = 1/v(x),   u(x₀) = 0,
+//
+// in a box of 2 or 3 space dimensions (no time axis).
+//
+//   problem: eikonal
+//   equation:
+//     source: [0.5, 0.25]           # x₀, inside the domain
+//     speed: "1"                    # v(x) > 0, an expression; or instead a two-layer medium:
+//     layers: {axis: y, interface: 0.5, speeds: [1, 2]}   # v = 1 for y < 0.5, 2 for y ≥ 0.5
+//     factored: false               # u = T₀·τ, the network gives τ (below)
+//     exact: "..."                  # optional, for a non-constant `speed` expression
+//     weight: 1                     # weight of the "pde" loss term
+//     source_weight: 10             # weight of the "source" loss term
+//
+// Loss terms:
+//   "pde"     (batch `interior`, uniform points) r = |∇u| − 1/v(x). The residual is not linear
+//             in the output streams: EikonalResidual below reads the value and gradient
+//             tangent streams and maps adjoints back (∂|g|/∂g = g/|g|, taken as 0 where
+//             |g| = 0).
+//   "source"  (batch `source`) the source condition at x₀ itself; its n points are all x₀,
+//             so `source: 1` is enough. r = u(x₀) (plain), r = τ(x₀) − 1 (factored).
+//
+// The solution is a cone at x₀ (u ≈ |x − x₀|/v₀), whose kink a smooth network rounds off.
+// With `factored: true` the travel time is factored as u = T₀ τ with the analytic
+// T₀ = |x − x₀|/v₀ (v₀ = v(x₀)), and the network represents the smooth factor τ (≈ 1 near the
+// source; τ ≡ 1 in a constant medium). The residual forms u and ∇u = τ ∇T₀ + T₀ ∇τ from the
+// network's value and gradient streams and sends its adjoints back to them:
+// τ̄ = ḡ·∇T₀, ∇τ̄ = T₀ ḡ with ḡ = r̄ ∇u/|∇u|. The source condition becomes τ(x₀) = 1 (the
+// equation at x₀ reads τ(x₀)/v₀ = 1/v(x₀)). The network output is then τ: solution.vti holds
+// τ ("tau", and "exact_tau" = T/T₀), and rel_l2 in metrics.json is the error of τ.
+//
+// Exact solutions (error metrics):
+//   constant speed   u = |x − x₀|/v.
+//   two layers       the first arrival over three kinds of ray, v_s the speed of the
+//                    source's layer, v_o the other one, h_s and h_r the distances of source
+//                    and receiver from the interface plane, Δ their distance along it:
+//                    - receiver in the source's layer: the direct ray |x − x₀|/v_s, and if
+//                      v_o > v_s the head wave Δ/v_o + (h_s + h_r) √(1/v_s² − 1/v_o²), which
+//                      exists from the critical distance Δ ≥ (h_s + h_r) tan θ_c on
+//                      (sin θ_c = v_s/v_o);
+//                    - receiver in the other layer: the refracted ray through the interface
+//                      point at distance s from the source's foot point, minimizing
+//                      √(s² + h_s²)/v_s + √((Δ − s)² + h_r²)/v_r over s ∈ [0, Δ] (Fermat;
+//                      convex in s, solved by bisection on its derivative — Snell's law).
+//   other `speed`    the `exact` expression if given, else none.
+//
+// write_outputs adds the travel-time errors travel_time_rel_l2 and travel_time_max_abs_err
+// on the output grid (equal to rel_l2 and max_abs_err unless factored) and, when factored,
+// writes travel_time.vti with u = T₀ τ, its exact value and its error.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "io/grid.h"
+#include "io/vtk_image.h"
+#include "solvers/problems.h"
+
+namespace nfield::solvers {
+namespace {
+
+// A two-layer medium: speeds[0] where x[axis] < interface, speeds[1] elsewhere.
+struct Layers {
+  int axis = 1;
+  double interface = 0;
+  double speeds[2] = {1, 1};
+
+  int layer(const double* x) const { return x[axis] < interface ? 0 : 1; }
+  double speed(const double* x) const { return speeds[layer(x)]; }
+};
+
+// The first-arrival time from x0 to x (both `d` long) in a two-layer medium; see the header
+// comment for the three kinds of ray.
+double layered_travel_time(const Layers& m, const double* x0, const double* x, int d) {
+  const int ls = m.layer(x0), lr = m.layer(x);
+  const double hs = std::abs(x0[m.axis] - m.interface), hr = std::abs(x[m.axis] - m.interface);
+  double delta2 = 0, dist2 = 0;
+  for (int a = 0; a < d; ++a) {
+    const double e = x[a] - x0[a];
+    dist2 += e * e;
+    if (a != m.axis) delta2 += e * e;
+  }
+  const double delta = std::sqrt(delta2);
+  const double vs = m.speeds[ls], vo = m.speeds[1 - ls];
+  if (ls == lr) {
+    double t = std::sqrt(dist2) / vs;
+    if (vo > vs) {
+      const double critical = (hs + hr) * vs / std::sqrt(vo * vo - vs * vs);
+      if (delta >= critical)
+        t = std::min(t, delta / vo + (hs + hr) * std::sqrt(1 / (vs * vs) - 1 / (vo * vo)));
+    }
+    return t;
+  }
+  // Refracted ray: f(s) = √(s² + hs²)/vs + √((Δ − s)² + hr²)/vr is convex on [0, Δ]; its
+  // derivative is increasing, ≤ 0 at 0 and ≥ 0 at Δ. Bisection to the last bit.
+  const double vr = m.speeds[lr];
+  auto slope = [&](double s) {
+    const double a = std::hypot(s, hs), b = std::hypot(delta - s, hr);
+    return (a > 0 ? s / (vs * a) : 0.0) - (b > 0 ? (delta - s) / (vr * b) : 0.0);
+  };
+  double lo = 0, hi = delta;
+  for (int iteration = 0; iteration < 200 && hi > lo; ++iteration) {
+    const double mid = 0.5 * (lo + hi);
+    if (mid <= lo || mid >= hi) break;
+    (slope(mid) < 0 ? lo : hi) = mid;
+  }
+  auto time = [&](double s) { return std::hypot(s, hs) / vs + std::hypot(delta - s, hr) / vr; };
+  return std::min(time(lo), time(hi));
+}
+
+// r = |∇u| − s(x) with s = 1/v, u the network output (plain) or T₀ τ (factored).
+class EikonalResidual final : public Residual {
+ public:
+  // slowness: one value per point of the set; x0 and v0 are used when factored.
+  EikonalResidual(Eigen::MatrixXd points, Eigen::VectorXd slowness, bool factored,
+                  Eigen::VectorXd x0, double v0)
+      : points_(std::move(points)), slowness_(std::move(slowness)), factored_(factored),
+        x0_(std::move(x0)), v0_(v0) {}
+
+  int components() const override { return 1; }
+
+  void evaluate(Eigen::Index first, const StreamLayout& layout, const Streams<double>& out,
+                Eigen::MatrixXd& r) const override {
+    const Eigen::Index n = out.points;
+    const int d = static_cast<int>(points_.cols());
+    r.resize(n, 1);
+    Eigen::VectorXd g(d), grad_t0(d);
+    for (Eigen::Index p = 0; p < n; ++p) {
+      gradient(first + p, p, layout, out, g, grad_t0);
+      r(p, 0) = g.norm() - slowness_(first + p);
+    }
+  }
+
+  void backward(Eigen::Index first, const StreamLayout& layout, const Streams<double>& out,
+                const Eigen::MatrixXd& r_bar, Streams<double>& adjoint) const override {
+    const Eigen::Index n = out.points;
+    const int d = static_cast<int>(points_.cols());
+    Eigen::VectorXd g(d), grad_t0(d);
+    for (Eigen::Index p = 0; p < n; ++p) {
+      const double t0 = gradient(first + p, p, layout, out, g, grad_t0);
+      const double norm = g.norm();
+      if (!(norm > 1e-12)) continue;  // |g| is not differentiable at 0: subgradient 0
+      const Eigen::VectorXd g_bar = (r_bar(p, 0) / norm) * g;
+      if (factored_) {
+        adjoint.stream(StreamLayout::value())(p, 0) += g_bar.dot(grad_t0);
+        for (int a = 0; a < d; ++a) adjoint.stream(layout.tangent(a))(p, 0) += t0 * g_bar(a);
+      } else {
+        for (int a = 0; a < d; ++a) adjoint.stream(layout.tangent(a))(p, 0) += g_bar(a);
+      }
+    }
+  }
+
+ private:
+  // ∇u at point `index` of the set (row `row` of the streams); factored: also ∇T₀ and
+  // returns T₀ (∇T₀ = 0 at x₀ itself, where it is undefined).
+  double gradient(Eigen::Index index, Eigen::Index row, const StreamLayout& layout,
+                  const Streams<double>& out, Eigen::VectorXd& g, Eigen::VectorXd& grad_t0) const {
+    const int d = static_cast<int>(points_.cols());
+    for (int a = 0; a < d; ++a) g(a) = out.stream(layout.tangent(a))(row, 0);
+    if (!factored_) return 0;
+    const Eigen::VectorXd e = points_.row(index).transpose() - x0_;
+    const double distance = e.norm();
+    const double t0 = distance / v0_;
+    if (distance > 0)
+      grad_t0 = e / (distance * v0_);
+    else
+      grad_t0.setZero();
+    const double tau = out.stream(StreamLayout::value())(row, 0);
+    g = tau * grad_t0 + t0 * g;
+    return t0;
+  }
+
+  Eigen::MatrixXd points_;
+  Eigen::VectorXd slowness_;
+  bool factored_;
+  Eigen::VectorXd x0_;
+  double v0_;
+};
+
+class Eikonal final : public Problem {
+ public:
+  explicit Eikonal(const ProblemContext& context)
+      : domain_(Domain::from_config(context.root.child("domain"))) {
+    const io::ConfigNode domain_node = context.root.child("domain");
+    if (domain_.has_time()) throw domain_node.error("time", "the eikonal equation has no time axis");
+    const int d = domain_.space_dim();
+    if (d < 2) throw domain_node.error("lower", "the eikonal problem needs 2 or 3 space dimensions");
+    const io::ConfigNode equation = context.root.child("equation");
+    const auto vars = domain_.expression_variables();
+
+    const auto source = equation.get_list<double>("source", static_cast<std::size_t>(d));
+    x0_.resize(d);
+    for (int a = 0; a < d; ++a) {
+      x0_(a) = source[a];
+      equation.require("source", source[a] >= domain_.lower()[a] && source[a] <= domain_.upper()[a],
+                       "expected a point inside the domain");
+    }
+    const bool has_speed = equation.has("speed"), has_layers = equation.has("layers");
+    equation.require(has_speed != has_layers, "expected exactly one of `speed` and `layers`");
+    if (has_speed) {
+      speed_ = std::make_shared<io::Expression>(equation.get_expression("speed", vars));
+    } else {
+      const io::ConfigNode layers = equation.child("layers");
+      std::vector<std::string> axes{"x", "y", "z"};
+      axes.resize(d);
+      const std::string axis = layers.get_choice("axis", axes);
+      layers_.axis = static_cast<int>(std::find(axes.begin(), axes.end(), axis) - axes.begin());
+      layers_.interface = layers.get<double>("interface");
+      layers.require("interface",
+                     layers_.interface > domain_.lower()[layers_.axis] &&
+                         layers_.interface < domain_.upper()[layers_.axis],
+                     "expected a plane inside the domain");
+      const auto speeds = layers.get_list<double>("speeds", 2);
+      for (int k = 0; k < 2; ++k) {
+        layers.require("speeds", speeds[k] > 0 && std::isfinite(speeds[k]), "expected speeds > 0");
+        layers_.speeds[k] = speeds[k];
+      }
+      layers.reject_unknown_keys();
+    }
+    const Eigen::MatrixXd x0_row = x0_.transpose();
+    v0_ = speeds(x0_row)(0);
+    equation.require(has_speed ? "speed" : "layers", v0_ > 0 && std::isfinite(v0_),
+                     "expected a speed > 0 at the source");
+    if (has_speed && speed_->is_constant()) constant_speed_ = v0_;
+    if (equation.has("exact")) {
+      equation.require("exact", has_speed && !speed_->is_constant(),
+                       "not used: the exact solution of a constant speed or of layers is built in");
+      exact_ = std::make_shared<io::Expression>(equation.get_expression("exact", vars));
+    }
+    factored_ = equation.get_or("factored", false);
+    weight_ = equation.get_or("weight", 1.0);
+    equation.require("weight", weight_ > 0 && std::isfinite(weight_), "expected a weight > 0");
+    source_weight_ = equation.get_or("source_weight", 10.0);
+    equation.require("source_weight", source_weight_ >= 0 && std::isfinite(source_weight_),
+                     "expected a weight >= 0");
+    equation.reject_unknown_keys();
+  }
+
+  const Domain& domain() const override { return domain_; }
+  std::vector<std::string> output_names() const override {
+    return {factored_ ? "tau" : "u"};
+  }
+
+  std::vector<LossTerm> loss_terms() const override {
+    const int d = domain_.space_dim();
+    LossTerm pde;
+    pde.name = "pde";
+    pde.batch_key = "interior";
+    pde.weight = weight_;
+    pde.spec = autodiff::StreamSpec::gradient(d);
+    pde.sample = [this](Random& rng, Eigen::Index n) { return domain_.sample_interior(rng, n); };
+    pde.residual = [this](const Eigen::MatrixXd& x) -> std::unique_ptr<Residual> {
+      const Eigen::VectorXd slowness = speeds(x).cwiseInverse();
+      return std::make_unique<EikonalResidual>(x, slowness, factored_, x0_, v0_);
+    };
+    std::vector<LossTerm> terms{pde};
+    if (source_weight_ > 0) {
+      LossTerm at_source;
+      at_source.name = "source";
+      at_source.batch_key = "source";
+      at_source.weight = source_weight_;
+      at_source.spec = autodiff::StreamSpec::values(d);
+      const Eigen::RowVectorXd x0 = x0_.transpose();
+      at_source.sample = [x0](Random&, Eigen::Index n) {
+        return Eigen::MatrixXd(x0.replicate(n, 1));
+      };
+      const double target = factored_ ? 1.0 : 0.0;
+      at_source.residual = [target](const Eigen::MatrixXd& x) -> std::unique_ptr<Residual> {
+        return std::make_unique<LinearResidual>(
+            std::vector<LinearResidual::Term>{{0, 0, 0, Eigen::VectorXd::Ones(1)}},
+            Eigen::MatrixXd::Constant(x.rows(), 1, target));
+      };
+      terms.push_back(at_source);
+    }
+    return terms;
+  }
+
+  bool has_exact() const override { return !speed_ || constant_speed_ > 0 || exact_; }
+
+  // The exact network output: the travel time, or τ = T/T₀ when factored (1 at x₀).
+  Eigen::MatrixXd exact(const Eigen::MatrixXd& x) const override {
+    const Eigen::VectorXd t = travel_time(x);
+    if (!factored_) return t;
+    Eigen::MatrixXd tau(x.rows(), 1);
+    for (Eigen::Index p = 0; p < x.rows(); ++p) {
+      const double t0 = (x.row(p).transpose() - x0_).norm() / v0_;
+      tau(p, 0) = t0 > 0 ? t(p) / t0 : 1.0;
+    }
+    return tau;
+  }
+
+  void write_outputs(const OutputContext& context,
+                     std::vector<std::pair<std::string, double>>& metrics) const override {
+    if (!has_exact()) return;
+    const int d = domain_.space_dim();
+    const io::Grid grid = io::make_grid(domain_.lower(), domain_.upper(), context.grid);
+    const Eigen::MatrixXd x = grid.points(d);
+    Eigen::VectorXd u = context.values(x).col(0);
+    if (factored_)
+      for (Eigen::Index p = 0; p < x.rows(); ++p) u(p) *= (x.row(p).transpose() - x0_).norm() / v0_;
+    const Eigen::VectorXd t = travel_time(x);
+    const Eigen::VectorXd error = u - t;
+    const double norm = t.norm();
+    metrics.emplace_back("travel_time_rel_l2", norm > 0 ? error.norm() / norm : error.norm());
+    metrics.emplace_back("travel_time_max_abs_err", error.cwiseAbs().maxCoeff());
+    if (factored_) {
+      io::PointArrays arrays;
+      arrays["travel_time"] = u;
+      arrays["exact_travel_time"] = t;
+      arrays["error_travel_time"] = error;
+      io::write_vti(context.dir / "travel_time.vti", grid, arrays);
+    }
+  }
+
+ private:
+  // v at points x (n × d).
+  Eigen::VectorXd speeds(const Eigen::MatrixXd& x) const {
+    if (speed_) return speed_->evaluate(x);
+    Eigen::VectorXd v(x.rows());
+    for (Eigen::Index p = 0; p < x.rows(); ++p) {
+      const Eigen::RowVectorXd row = x.row(p);
+      v(p) = layers_.speed(row.data());
+    }
+    return v;
+  }
+
+  // The exact first-arrival time at points x.
+  Eigen::VectorXd travel_time(const Eigen::MatrixXd& x) const {
+    if (exact_) return exact_->evaluate(x);
+    const int d = domain_.space_dim();
+    Eigen::VectorXd t(x.rows());
+    for (Eigen::Index p = 0; p < x.rows(); ++p) {
+      const Eigen::RowVectorXd row = x.row(p);
+      t(p) = speed_ ? (row.transpose() - x0_).norm() / constant_speed_
+                    : layered_travel_time(layers_, x0_.data(), row.data(), d);
+    }
+    return t;
+  }
+
+  Domain domain_;
+  Eigen::VectorXd x0_;
+  std::shared_ptr<io::Expression> speed_, exact_;
+  Layers layers_;
+  double v0_ = 1, constant_speed_ = 0;
+  bool factored_ = false;
+  double weight_ = 1, source_weight_ = 10;
+};
+
+}  // namespace
+
+std::unique_ptr<Problem> make_eikonal(const ProblemContext& context) {
+  return std::make_unique<Eikonal>(context);
+}
+
+}  // namespace nfield::solvers

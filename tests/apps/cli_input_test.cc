@@ -1,0 +1,348 @@
+// SPDX-License-Identifier: MIT
+//
+// Bad input to the nfield program: every broken config is refused by `nfield validate` and
+// `nfield run` alike with exit code 2 and one line on stderr,
+//   nfield: error: FILE:LINE:COL: KEY.PATH: what was expected
+// and nothing is written (no output folder, not even the one --out names). Also bad
+// command lines (missing files, bad options) and the help texts.
+#include <gtest/gtest.h>
+
+#include <cstddef>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "cli_test_support.h"
+
+namespace nfield::apps::testing {
+namespace {
+
+// A small, valid Poisson config; the cases below break one thing in it.
+constexpr const char* kBase =
+    "problem: poisson\n"                                   // 1
+    "domain:\n"                                            // 2
+    "  lower: [0, 0]\n"                                    // 3
+    "  upper: [1, 1]\n"                                    // 4
+    "equation:\n"                                          // 5
+    "  source: \"-2*pi^2*sin(pi*x)*sin(pi*y)\"\n"          // 6
+    "  exact: \"sin(pi*x)*sin(pi*y)\"\n"                   // 7
+    "conditions:\n"                                        // 8
+    "  - {on: boundary, type: dirichlet, value: \"0\"}\n"  // 9
+    "field:\n"                                             // 10
+    "  type: siren\n"                                      // 11
+    "  hidden: [8, 8]\n"                                   // 12
+    "  first_omega: 3\n"                                   // 13
+    "  hidden_omega: 1\n"                                  // 14
+    "training:\n"                                          // 15
+    "  seed: 0\n"                                          // 16
+    "  precision: double\n"                                // 17
+    "  threads: 1\n"                                       // 18
+    "  batch: {interior: 32, boundary: 16}\n"              // 19
+    "  stages:\n"                                          // 20
+    "    - {optimizer: adam, steps: 3, lr: 1.0e-3}\n"      // 21
+    "output:\n"                                            // 22
+    "  grid: [5, 5]\n";                                    // 23
+
+// kBase with the one occurrence of `from` replaced by `to`.
+std::string edit(const std::string& from, const std::string& to, std::string text = kBase) {
+  const std::size_t at = text.find(from);
+  if (at == std::string::npos || text.find(from, at + 1) != std::string::npos)
+    throw std::logic_error("edit: '" + from + "' is not in the config exactly once");
+  return text.replace(at, from.size(), to);
+}
+
+struct BadConfig {
+  std::string name;
+  std::string yaml;
+  // Where the error points: a text that occurs once in `yaml`, with '|' at the reported
+  // character ("lr: |fast"). Empty: the message names no line and column.
+  std::string at;
+  std::string key_path;               // "" when the message names none
+  std::vector<std::string> expected;  // further parts of the message
+  std::vector<std::string> args = {}; // after CONFIG (e.g. --set k=v)
+  std::string file = {};              // the place named instead of the config file
+};
+
+void PrintTo(const BadConfig& c, std::ostream* out) { *out << c.name; }
+
+// "LINE:COL" of the '|' in `at` within `yaml`.
+std::string location(const BadConfig& c) {
+  const std::size_t bar = c.at.find('|');
+  const std::string text = c.at.substr(0, bar) + c.at.substr(bar + 1);
+  const std::size_t start = c.yaml.find(text);
+  if (bar == std::string::npos || start == std::string::npos ||
+      c.yaml.find(text, start + 1) != std::string::npos)
+    throw std::logic_error(c.name + ": 'at' must occur once in the config and hold one '|'");
+  const std::size_t position = start + bar;
+  const std::string before = c.yaml.substr(0, position);
+  const auto line = std::count(before.begin(), before.end(), '\n');
+  const std::size_t newline = before.rfind('\n');
+  const std::size_t column = newline == std::string::npos ? position : position - newline - 1;
+  return std::to_string(line + 1) + ":" + std::to_string(column + 1);
+}
+
+std::vector<BadConfig> bad_configs() {
+  const std::string base = kBase;
+  return {
+      // Unknown keys, at every level.
+      {"UnknownTopLevelKey", base + "solver: fast\n", "|solver", "",
+       {"unknown key 'solver' (valid keys: ", "problem", "domain", "training", "output"}},
+      {"UnknownStageKey", edit("lr: 1.0e-3}", "lrr: 1.0e-3}"), "|lrr", "training.stages[0]",
+       {"unknown key 'lrr' (valid keys: optimizer, steps, lr, schedule, lr_final)"}},
+      {"UnknownFieldKey", edit("  hidden: [8, 8]", "  hiden: [8, 8]"), "|hiden", "field",
+       {"unknown key 'hiden'", "hidden"}},
+      {"UnknownConditionKey", edit("value: \"0\"}", "value: \"0\", wieght: 2}"), "|wieght",
+       "conditions[0]", {"unknown key 'wieght'", "weight"}},
+      {"UnknownDomainKey", edit("  upper: [1, 1]\n", "  upper: [1, 1]\n  tme: [0, 1]\n"), "|tme",
+       "domain", {"unknown key 'tme'", "time"}},
+      {"UnknownOutputKey", base + "  every: 3\n", "|every", "output",
+       {"unknown key 'every'", "grid", "frames"}},
+      {"UnknownBatchKey", edit("interior: 32", "interor: 32"), "|interor", "training.batch",
+       {"unknown key 'interor'", "interior", "boundary"}},
+      {"UnknownEquationKey", edit("  exact:", "  exakt:"), "|exakt", "equation",
+       {"unknown key 'exakt'", "source", "exact"}},
+      // Wrong types.
+      {"StringForNumber", edit("lr: 1.0e-3", "lr: fast"), "lr: |fast", "training.stages[0].lr",
+       {"expected a number, got 'fast'"}},
+      {"QuotedStringForInteger", edit("steps: 3", "steps: \"three\""), "steps: |\"three\"",
+       "training.stages[0].steps", {"expected an integer, got 'three'"}},
+      {"FractionForInteger", edit("threads: 1", "threads: 1.5"), "threads: |1.5",
+       "training.threads", {"expected an integer, got '1.5'"}},
+      {"ScalarForList", edit("hidden: [8, 8]", "hidden: 8"), "hidden: |8", "field.hidden",
+       {"expected a list of integers, got '8'"}},
+      {"MappingForConditions", edit("  - {on: boundary, type: dirichlet, value: \"0\"}",
+                                    "  {on: boundary, type: dirichlet, value: \"0\"}"),
+       "  |{on: boundary", "conditions", {"expected a list of conditions"}},
+      // Values out of range.
+      {"NegativeSteps", edit("steps: 3", "steps: -5"), "steps: |-5", "training.stages[0].steps",
+       {"expected an integer in [0, 1073741824], got '-5'"}},
+      {"ZeroLearningRate", edit("lr: 1.0e-3", "lr: 0"), "lr: |0", "training.stages[0].lr",
+       {"expected a learning rate > 0"}},
+      {"GridOfOnePoint", edit("grid: [5, 5]", "grid: [1, 5]"), "grid: |[1, 5]", "output.grid",
+       {"expected point counts in [2, 4096]"}},
+      {"NegativeThreads", edit("threads: 1", "threads: -1"), "threads: |-1", "training.threads",
+       {"expected an integer in [0, 1024], got '-1'"}},
+      {"ZeroWidth", edit("hidden: [8, 8]", "hidden: [8, 0]"), "hidden: |[8, 0]", "field.hidden",
+       {"expected widths in [1, 16384]"}},
+      {"EmptyStages", edit("    - {optimizer: adam, steps: 3, lr: 1.0e-3}\n", "    []\n"),
+       "    |[]", "training.stages", {"expected a non-empty list of stages"}},
+      // Lists of the wrong length.
+      {"UpperLongerThanLower", edit("upper: [1, 1]", "upper: [1, 1, 1]"), "upper: |[1, 1, 1]",
+       "domain.upper", {"expected a list of 2 numbers, got a list of 3"}},
+      {"GridOfWrongLength", edit("grid: [5, 5]", "grid: [5]"), "grid: |[5]", "output.grid",
+       {"expected a list of 2 integers, got a list of 1"}},
+      // Unknown choices: the message lists the valid ones.
+      {"BadOptimizer", edit("optimizer: adam", "optimizer: adamw"), "optimizer: |adamw",
+       "training.stages[0].optimizer", {"expected one of adam, lbfgs; got 'adamw'"}},
+      {"BadProblem", edit("problem: poisson", "problem: poison"), "problem: |poison", "problem",
+       {"expected one of ", "poisson", "wave", "; got 'poison'"}},
+      {"BadFieldType", edit("type: siren", "type: sirenn"), "type: |sirenn", "field.type",
+       {"expected one of mlp, siren; got 'sirenn'"}},
+      {"BadActivation", edit("type: siren", "type: mlp\n  activation: swish"), "activation: |swish",
+       "field.activation", {"expected one of ", "relu", "sine", "softplus", "tanh", "; got 'swish'"}},
+      {"BadEncoding", edit("  hidden_omega: 1\n", "  hidden_omega: 1\n  encoding: {type: hash}\n"),
+       "type: |hash", "field.encoding.type",
+       {"expected one of ", "fourier", "identity", "positional", "; got 'hash'"}},
+      {"BadPrecision", edit("precision: double", "precision: half"), "precision: |half",
+       "training.precision", {"expected one of float, double; got 'half'"}},
+      {"BadSchedule", edit("lr: 1.0e-3}", "lr: 1.0e-3, schedule: linear}"), "schedule: |linear",
+       "training.stages[0].schedule", {"expected one of constant, cosine, exponential; got 'linear'"}},
+      // Expressions.
+      {"UnbalancedExpression", edit("-2*pi^2*sin(pi*x)*sin(pi*y)", "-2*pi^2*sin(pi*x"),
+       "source: \"-2*pi^2*sin(pi*x|\"", "equation.source", {"in expression '-2*pi^2*sin(pi*x'"}},
+      {"UnknownVariable", edit("exact: \"sin(pi*x)*sin(pi*y)\"", "exact: \"sin(pi*q)*sin(pi*y)\""),
+       "exact: \"sin(pi*|q)", "equation.exact", {"in expression 'sin(pi*q)*sin(pi*y)'", "\"q\""}},
+      {"BadExpressionInValueList", edit("value: \"0\"}", "value: [\"sin(pi*x\"]}"),
+       "value: [|\"sin(pi*x\"]", "conditions[0].value[0]", {"in expression 'sin(pi*x'"}},
+      // Missing required keys.
+      {"MissingProblem", edit("problem: poisson\n", ""), "|domain:", "",
+       {"missing required key 'problem'"}},
+      {"MissingDomain", edit("domain:\n  lower: [0, 0]\n  upper: [1, 1]\n", ""), "|problem", "",
+       {"missing required key 'domain'"}},
+      {"MissingSource", edit("  source: \"-2*pi^2*sin(pi*x)*sin(pi*y)\"\n", ""), "  |exact",
+       "equation", {"missing required key 'source'"}},
+      {"EmptyFile", "", "", "", {"missing required key 'problem'"}},
+      // Conditions.
+      {"BadFaceName", edit("on: boundary", "on: w_min"), "on: |w_min", "conditions[0].on",
+       {"unknown face 'w_min' (valid: x_max, x_min, y_max, y_min), or boundary, initial"}},
+      {"EmptyFaceList", edit("on: boundary", "on: []"), "on: |[]", "conditions[0].on",
+       {"expected a face name"}},
+      {"InitialWithoutTime", edit("on: boundary, type: dirichlet", "on: initial, type: value"),
+       "on: |initial", "conditions[0].on", {"'initial' needs a domain with a time interval"}},
+      // YAML itself.
+      {"YamlSyntax", edit("lower: [0, 0]", "lower: [0, 0"), "|  upper", "",
+       {"YAML syntax error"}},
+      {"DuplicateKey", edit("  seed: 0\n", "  seed: 0\n  seed: 1\n"), "  |seed: 1", "training",
+       {"duplicate key 'seed' (first on line 16)"}},
+      {"TopLevelList", "- poisson\n- wave\n", "|- poisson", "",
+       {"expected a mapping of keys at the top level, got a list of 2"}},
+      // --set: values set there carry no line; a bad path names the assignment.
+      {"SetStringForNumber", base, "", "training.stages[0].lr", {"expected a number, got 'abc'"},
+       {"--set", "training.stages[0].lr=abc"}},
+      {"SetIndexOutOfRange", base, "", "training.stages",
+       {"index 3 out of range (the list has 1 items)"}, {"--set", "training.stages[3].lr=1"},
+       "--set 'training.stages[3].lr=1'"},
+      {"SetUnknownKey", base, "", "training", {"unknown key 'sead'", "seed"},
+       {"--set", "training.sead=3"}},
+  };
+}
+
+class BadConfigTest : public ::testing::TestWithParam<BadConfig> {
+ protected:
+  void SetUp() override {
+    const auto dir = scratch_dir();
+    work_ = dir / "work";
+    capture_ = dir / "capture";
+    std::filesystem::create_directories(work_);
+    config_ = work_ / "bad.yaml";
+    write_text(config_, GetParam().yaml);
+  }
+
+  // The one line stderr should hold.
+  void expect_error_line(const Outcome& o) const {
+    const BadConfig& c = GetParam();
+    EXPECT_EQ(o.code, 2) << describe(o);
+    ASSERT_FALSE(o.err.empty()) << describe(o);
+    EXPECT_EQ(o.err.back(), '\n') << describe(o);
+    EXPECT_EQ(std::count(o.err.begin(), o.err.end(), '\n'), 1) << "not one line:\n" << o.err;
+    std::string prefix = "nfield: error: " + (c.file.empty() ? config_.string() : c.file);
+    if (!c.at.empty()) prefix += ":" + location(c);
+    prefix += ": ";
+    if (!c.key_path.empty()) prefix += c.key_path + ": ";
+    EXPECT_EQ(o.err.substr(0, prefix.size()), prefix) << "stderr: " << o.err;
+    for (const std::string& part : c.expected)
+      EXPECT_NE(o.err.find(part), std::string::npos) << "stderr lacks '" << part << "':\n" << o.err;
+  }
+
+  std::vector<std::string> arguments(const std::string& command) const {
+    std::vector<std::string> args{command, config_.string()};
+    args.insert(args.end(), GetParam().args.begin(), GetParam().args.end());
+    return args;
+  }
+
+  std::filesystem::path work_, capture_, config_;
+};
+
+TEST_P(BadConfigTest, ValidateRefusesWithLocatedMessage) {
+  const Outcome o = run_nfield(arguments("validate"), work_, capture_);
+  expect_error_line(o);
+  EXPECT_EQ(o.out, "");
+  EXPECT_EQ(tree(work_), std::vector<std::string>{"bad.yaml"});
+}
+
+TEST_P(BadConfigTest, RunRefusesAndWritesNothing) {
+  std::vector<std::string> args = arguments("run");
+  const std::filesystem::path out = work_ / "out_dir";
+  args.insert(args.end(), {"--out", out.string()});
+  const Outcome o = run_nfield(args, work_, capture_);
+  expect_error_line(o);
+  EXPECT_EQ(o.out, "");
+  EXPECT_FALSE(std::filesystem::exists(out));
+  EXPECT_EQ(tree(work_), std::vector<std::string>{"bad.yaml"});
+}
+
+INSTANTIATE_TEST_SUITE_P(Cases, BadConfigTest, ::testing::ValuesIn(bad_configs()),
+                         [](const ::testing::TestParamInfo<BadConfig>& info) { return info.param.name; });
+
+// The base config itself is fine (so each case above fails for its own reason only).
+TEST(GoodConfig, ValidatesAndRuns) {
+  const auto dir = scratch_dir();
+  const auto work = dir / "work";
+  std::filesystem::create_directories(work);
+  write_text(work / "good.yaml", kBase);
+  Outcome o = run_nfield({"validate", (work / "good.yaml").string()}, work, dir / "capture");
+  EXPECT_EQ(o.code, 0) << describe(o);
+  EXPECT_NE(o.out.find("good.yaml: valid"), std::string::npos) << o.out;
+  EXPECT_EQ(o.err, "");
+  EXPECT_EQ(tree(work), std::vector<std::string>{"good.yaml"});
+
+  o = run_nfield({"run", (work / "good.yaml").string(), "--out", (work / "out").string()}, work,
+                 dir / "capture");
+  EXPECT_EQ(o.code, 0) << describe(o);
+  for (const char* file : {"config.yaml", "checkpoint.h5", "solution.vti", "metrics.json"})
+    EXPECT_TRUE(std::filesystem::exists(work / "out" / file)) << file;
+}
+
+// Command lines that CLI11 refuses: exit code 2, the reason on stderr, nothing written.
+struct BadCommand {
+  std::string name;
+  std::vector<std::string> args;  // "GOOD" stands for a valid config, "OUT" for an output folder
+  std::vector<std::string> expected;
+};
+
+void PrintTo(const BadCommand& c, std::ostream* out) { *out << c.name; }
+
+class BadCommandTest : public ::testing::TestWithParam<BadCommand> {};
+
+TEST_P(BadCommandTest, ExitsWithTwoAndWritesNothing) {
+  const auto dir = scratch_dir();
+  const auto work = dir / "work";
+  std::filesystem::create_directories(work);
+  write_text(work / "good.yaml", kBase);
+  std::vector<std::string> args;
+  for (const std::string& a : GetParam().args)
+    args.push_back(a == "GOOD" ? (work / "good.yaml").string() : a == "OUT" ? (work / "out").string() : a);
+  const Outcome o = run_nfield(args, work, dir / "capture");
+  EXPECT_EQ(o.code, 2) << describe(o);
+  for (const std::string& part : GetParam().expected)
+    EXPECT_NE(o.err.find(part), std::string::npos) << "stderr lacks '" << part << "':\n" << o.err;
+  EXPECT_EQ(tree(work), std::vector<std::string>{"good.yaml"});
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Cases, BadCommandTest,
+    ::testing::ValuesIn(std::vector<BadCommand>{
+        {"RunMissingConfig", {"run", "missing.yaml", "--out", "OUT"}, {"missing.yaml", "does not exist"}},
+        {"ValidateMissingConfig", {"validate", "missing.yaml"}, {"missing.yaml", "does not exist"}},
+        {"RunConfigIsFolder", {"run", ".", "--out", "OUT"}, {"."}},
+        {"ResumeMissingCheckpoint", {"run", "GOOD", "--resume", "missing.h5", "--out", "OUT"},
+         {"missing.h5", "does not exist"}},
+        {"EvalMissingCheckpoint", {"eval", "missing.h5", "--out", "OUT"}, {"missing.h5", "does not exist"}},
+        {"EvalGridTooSmall", {"eval", "GOOD", "--grid", "1", "--out", "OUT"}, {"--grid", "[2 - 4096]"}},
+        {"EvalGridNotANumber", {"eval", "GOOD", "--grid", "many", "--out", "OUT"}, {"--grid"}},
+        {"RunWithoutConfig", {"run"}, {"config"}},
+        {"UnknownOption", {"run", "GOOD", "--bogus", "--out", "OUT"}, {"--bogus"}},
+        {"UnknownCommand", {"frobnicate"}, {"frobnicate"}},
+        {"NoCommand", {}, {"subcommand"}},
+        {"SetWithoutEquals", {"run", "GOOD", "--set", "training.seed", "--out", "OUT"},
+         {"--set 'training.seed'", "expected KEY.PATH=VALUE"}},
+    }),
+    [](const ::testing::TestParamInfo<BadCommand>& info) { return info.param.name; });
+
+TEST(Help, MainHelpListsCommands) {
+  const auto dir = scratch_dir();
+  const Outcome o = run_nfield({"--help"}, dir, dir / "capture");
+  EXPECT_EQ(o.code, 0) << describe(o);
+  for (const char* part : {"run", "validate", "eval", "bench", "--version"})
+    EXPECT_NE(o.out.find(part), std::string::npos) << "help lacks '" << part << "':\n" << o.out;
+}
+
+TEST(Help, RunHelpListsOptions) {
+  const auto dir = scratch_dir();
+  const Outcome o = run_nfield({"run", "--help"}, dir, dir / "capture");
+  EXPECT_EQ(o.code, 0) << describe(o);
+  for (const char* part : {"config", "--set", "--out", "--resume", "YAML"})
+    EXPECT_NE(o.out.find(part), std::string::npos) << "help lacks '" << part << "':\n" << o.out;
+  EXPECT_EQ(tree(dir), std::vector<std::string>{"capture", "capture/stderr.txt"});
+}
+
+TEST(Help, ValidateAndEvalHelp) {
+  const auto dir = scratch_dir();
+  Outcome o = run_nfield({"validate", "--help"}, dir, dir / "capture");
+  EXPECT_EQ(o.code, 0) << describe(o);
+  EXPECT_NE(o.out.find("--set"), std::string::npos) << o.out;
+  o = run_nfield({"eval", "--help"}, dir, dir / "capture");
+  EXPECT_EQ(o.code, 0) << describe(o);
+  for (const char* part : {"checkpoint", "--grid", "--out"})
+    EXPECT_NE(o.out.find(part), std::string::npos) << "help lacks '" << part << "':\n" << o.out;
+}
+
+TEST(Help, Version) {
+  const auto dir = scratch_dir();
+  const Outcome o = run_nfield({"--version"}, dir, dir / "capture");
+  EXPECT_EQ(o.code, 0) << describe(o);
+  EXPECT_FALSE(o.out.empty());
+}
+
+}  // namespace
+}  // namespace nfield::apps::testing

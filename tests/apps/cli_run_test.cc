@@ -1,0 +1,324 @@
+// SPDX-License-Identifier: MIT
+//
+// What `nfield run` and `nfield eval` write, checked value by value against the trained
+// field read back from the checkpoint, and Ctrl-C + --resume: a run interrupted by SIGINT
+// writes a whole checkpoint and its outputs (exit 130), and resuming it ends with the same
+// checkpoint, bit for bit, as a run never interrupted.
+#include <gtest/gtest.h>
+
+#include <signal.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "cli_test_support.h"
+#include "fields/field_io.h"
+#include "io/hdf5_file.h"
+#include "io/vtk_image.h"
+
+namespace nfield::apps::testing {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+std::string poisson_config(const std::string& domain, const std::string& training,
+                           const std::string& output) {
+  return "problem: poisson\n"
+         "domain: " + domain + "\n"
+         "equation:\n"
+         "  source: \"-2*pi^2*sin(pi*x)*sin(pi*y)\"\n"
+         "  exact: \"sin(pi*x)*sin(pi*y)\"\n"
+         "conditions:\n"
+         "  - {on: boundary, type: dirichlet, value: \"0\"}\n"
+         "field: {type: siren, hidden: [16, 16], first_omega: 3, hidden_omega: 1}\n"
+         "training:\n" + training +
+         "output: " + output + "\n";
+}
+
+nlohmann::json read_json(const std::filesystem::path& path) {
+  return nlohmann::json::parse(read_text(path));
+}
+
+// No temporary of an atomic write (name.tmp, .name.tmp-PID-N) left anywhere below `dir`.
+void expect_no_temporaries(const std::filesystem::path& dir) {
+  for (const std::string& name : tree(dir))
+    EXPECT_EQ(name.find("tmp"), std::string::npos) << "left over: " << (dir / name);
+}
+
+bool same_bits(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
+  return a.rows() == b.rows() && a.cols() == b.cols() &&
+         std::memcmp(a.data(), b.data(), sizeof(double) * static_cast<size_t>(a.size())) == 0;
+}
+
+// Every dataset of two HDF5 files: the same names, types, shapes and bits.
+void expect_same_datasets(const std::filesystem::path& a_path, const std::filesystem::path& b_path) {
+  const io::H5Reader a(a_path), b(b_path);
+  const std::vector<std::string> names = a.dataset_names();
+  ASSERT_EQ(names, b.dataset_names());
+  bool has_weights = false;
+  for (const std::string& name : names) {
+    SCOPED_TRACE(name);
+    has_weights = has_weights || name.find("field/layers/") == 0;
+    ASSERT_EQ(a.type(name), b.type(name));
+    const auto shape = a.shape(name);
+    ASSERT_EQ(shape, b.shape(name));
+    // Reading as double converts float exactly, so equal doubles mean equal floats.
+    if (shape.size() == 2) {
+      EXPECT_TRUE(same_bits(a.read_matrix<double>(name), b.read_matrix<double>(name)));
+    } else if (shape.size() == 1) {
+      const Eigen::MatrixXd va = a.read_vector<double>(name), vb = b.read_vector<double>(name);
+      EXPECT_TRUE(same_bits(va, vb));
+    }
+  }
+  EXPECT_TRUE(has_weights);
+}
+
+// ---- Ctrl-C and --resume ------------------------------------------------------------
+
+class ResumeTest : public ::testing::TestWithParam<std::string> {};
+
+constexpr int kSteps = 90;
+
+std::string resume_config(const std::string& precision) {
+  return poisson_config("{lower: [0, 0], upper: [1, 1]}",
+                        "  seed: 7\n"
+                        "  precision: " + precision + "\n"
+                        "  threads: 2\n"
+                        "  batch: {interior: 256, boundary: 64}\n"
+                        "  resample_every: 4\n"
+                        "  log_every: 1\n"
+                        "  checkpoint_every: 30\n"
+                        "  stages:\n"
+                        "    - {optimizer: adam, steps: " + std::to_string(kSteps) +
+                            ", lr: 2.0e-3, schedule: cosine, lr_final: 1.0e-4}\n",
+                        "{grid: [9, 9]}");
+}
+
+TEST_P(ResumeTest, InterruptedRunResumesBitExact) {
+  const auto dir = scratch_dir();
+  const auto config = dir / "resume.yaml";
+  write_text(config, resume_config(GetParam()));
+  const auto uninterrupted = dir / "uninterrupted", interrupted = dir / "interrupted",
+             resumed = dir / "resumed";
+
+  Outcome o = run_nfield({"run", config.string(), "--out", uninterrupted.string()}, dir, dir / "capture");
+  ASSERT_EQ(o.code, 0) << describe(o);
+  expect_no_temporaries(uninterrupted);
+
+  // Interrupt after step 20. The child writes a line per step into a pipe of 4 KiB, so it
+  // cannot get more than some 40 steps ahead of the lines read here: it stops long before
+  // the end.
+  long stopped_after = 0;
+  {
+    Child child({"run", config.string(), "--out", interrupted.string()}, dir, dir / "stderr.txt", 4096);
+    std::string line;
+    while (child.read_line(line)) {
+      long step = 0, total = 0;
+      if (std::sscanf(line.c_str(), "step %ld/%ld", &step, &total) == 2 && step >= 20) {
+        stopped_after = step;
+        break;
+      }
+    }
+    ASSERT_GE(stopped_after, 20) << "no progress line for step 20";
+    ASSERT_EQ(kill(child.pid(), SIGINT), 0);
+    o = child.finish();
+  }
+  ASSERT_EQ(o.code, 130) << describe(o);
+  EXPECT_FALSE(o.signaled);
+  for (const char* file : {"config.yaml", "checkpoint.h5", "metrics.json", "solution.vti", "solution.png"})
+    EXPECT_TRUE(std::filesystem::exists(interrupted / file)) << file;
+  expect_no_temporaries(interrupted);
+  const nlohmann::json metrics = read_json(interrupted / "metrics.json");
+  EXPECT_EQ(metrics["finished"], false);
+  const long steps = metrics["steps"];
+  EXPECT_GE(steps, stopped_after);
+  EXPECT_LT(steps, kSteps);
+  EXPECT_NE(o.out.find("interrupted at step " + std::to_string(steps)), std::string::npos) << o.out;
+  {
+    // The checkpoint is whole and holds the state reached.
+    const io::H5Reader checkpoint(interrupted / "checkpoint.h5");
+    EXPECT_EQ(checkpoint.read_attribute<std::int64_t>("trainer", "global_step"), steps);
+    EXPECT_EQ(checkpoint.read_attribute<std::int64_t>("trainer", "stage_step"), steps);
+    EXPECT_NO_THROW(fields::load_field<double>(checkpoint));
+  }
+
+  o = run_nfield({"run", config.string(), "--resume", (interrupted / "checkpoint.h5").string(), "--out",
+                  resumed.string()},
+                 dir, dir / "capture");
+  ASSERT_EQ(o.code, 0) << describe(o);
+  EXPECT_NE(o.out.find("at step " + std::to_string(steps)), std::string::npos) << o.out;
+  expect_no_temporaries(resumed);
+  const nlohmann::json resumed_metrics = read_json(resumed / "metrics.json");
+  const nlohmann::json full_metrics = read_json(uninterrupted / "metrics.json");
+  EXPECT_EQ(resumed_metrics["finished"], true);
+  EXPECT_EQ(resumed_metrics["steps"], kSteps);
+  EXPECT_EQ(resumed_metrics["losses"], full_metrics["losses"]);
+  EXPECT_EQ(resumed_metrics["rel_l2"], full_metrics["rel_l2"]);
+
+  // Parameters, Adam moments, points and losses: bit for bit.
+  expect_same_datasets(uninterrupted / "checkpoint.h5", resumed / "checkpoint.h5");
+  const io::ImageData a = io::read_vti(uninterrupted / "solution.vti");
+  const io::ImageData b = io::read_vti(resumed / "solution.vti");
+  for (const auto& [name, values] : a.arrays) {
+    SCOPED_TRACE(name);
+    ASSERT_TRUE(b.arrays.count(name));
+    EXPECT_TRUE(same_bits(values, b.arrays.at(name)));
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Precisions, ResumeTest, ::testing::Values("double", "float"));
+
+// A checkpoint of another network is refused before anything is written.
+TEST(Resume, CheckpointOfAnotherFieldWritesNothing) {
+  const auto dir = scratch_dir();
+  const std::string training =
+      "  threads: 1\n  batch: {interior: 32, boundary: 16}\n"
+      "  stages:\n    - {optimizer: adam, steps: 2, lr: 1.0e-3}\n";
+  write_text(dir / "small.yaml", poisson_config("{lower: [0, 0], upper: [1, 1]}", training, "{grid: [5, 5]}"));
+  std::string other = poisson_config("{lower: [0, 0], upper: [1, 1]}", training, "{grid: [5, 5]}");
+  other.replace(other.find("[16, 16]"), 8, "[8]");
+  write_text(dir / "other.yaml", other);
+  Outcome o = run_nfield({"run", (dir / "small.yaml").string(), "--out", (dir / "small").string()}, dir,
+                         dir / "capture");
+  ASSERT_EQ(o.code, 0) << describe(o);
+  o = run_nfield({"run", (dir / "other.yaml").string(), "--resume", (dir / "small/checkpoint.h5").string(),
+                  "--out", (dir / "other").string()},
+                 dir, dir / "capture");
+  EXPECT_NE(o.code, 0) << describe(o);
+  EXPECT_NE(o.code, 130) << describe(o);
+  EXPECT_EQ(std::count(o.err.begin(), o.err.end(), '\n'), 1) << o.err;
+  EXPECT_NE(o.err.find("parameters"), std::string::npos) << o.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "other"));
+}
+
+// ---- outputs, value by value ----------------------------------------------------------
+
+// A box other than the unit square and a grid of unequal counts, so that mixing up the
+// axes or the point order shows.
+constexpr double kLower[2] = {0.0, -0.5}, kUpper[2] = {2.0, 1.0};
+
+std::string outputs_config(const std::string& precision) {
+  return poisson_config("{lower: [0, -0.5], upper: [2, 1]}",
+                        "  seed: 3\n"
+                        "  precision: " + precision + "\n"
+                        "  threads: 1\n"
+                        "  batch: {interior: 128, boundary: 32}\n"
+                        "  stages:\n"
+                        "    - {optimizer: adam, steps: 25, lr: 5.0e-3}\n",
+                        "{grid: [9, 7]}");
+}
+
+// Checks a solution.vti against the field in `checkpoint`: grid, u, grad_u, exact_u,
+// error_u. Returns the arrays.
+io::ImageData check_solution(const std::filesystem::path& vti, const std::filesystem::path& checkpoint,
+                             int nx, int ny, double tolerance) {
+  const io::ImageData image = io::read_vti(vti);
+  EXPECT_EQ(image.grid.dims, (std::array<int, 3>{nx, ny, 1}));
+  EXPECT_DOUBLE_EQ(image.grid.origin[0], kLower[0]);
+  EXPECT_DOUBLE_EQ(image.grid.origin[1], kLower[1]);
+  EXPECT_DOUBLE_EQ(image.grid.spacing[0], (kUpper[0] - kLower[0]) / (nx - 1));
+  EXPECT_DOUBLE_EQ(image.grid.spacing[1], (kUpper[1] - kLower[1]) / (ny - 1));
+  const Eigen::MatrixXd x = image.grid.points(2);
+  const Eigen::Index n = x.rows();
+  EXPECT_EQ(n, nx * ny);
+  // The last point is the upper corner.
+  EXPECT_NEAR(x(n - 1, 0), kUpper[0], 1e-12);
+  EXPECT_NEAR(x(n - 1, 1), kUpper[1], 1e-12);
+
+  const fields::Field<double> field = fields::load_field<double>(io::H5Reader(checkpoint));
+  const Eigen::MatrixXd values = field.values(x);
+  const Eigen::MatrixXd& u = io::require_array(image.arrays, "u", vti);
+  const Eigen::MatrixXd& exact = io::require_array(image.arrays, "exact_u", vti);
+  const Eigen::MatrixXd& error = io::require_array(image.arrays, "error_u", vti);
+  const Eigen::MatrixXd& gradient = io::require_array(image.arrays, "grad_u", vti);
+  EXPECT_TRUE(image.arrays.count("residual"));
+  EXPECT_EQ(u.rows(), n);
+  EXPECT_EQ(u.cols(), 1);
+  EXPECT_EQ(gradient.cols(), 3);
+  const double h = 1e-6;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    SCOPED_TRACE("point " + std::to_string(i));
+    EXPECT_NEAR(u(i, 0), values(i, 0), tolerance * (1 + std::abs(values(i, 0))));
+    EXPECT_NEAR(exact(i, 0), std::sin(kPi * x(i, 0)) * std::sin(kPi * x(i, 1)), 1e-14);
+    EXPECT_EQ(error(i, 0), u(i, 0) - exact(i, 0));
+    // grad_u against central differences of the field.
+    for (int a = 0; a < 2; ++a) {
+      Eigen::MatrixXd p(2, 2);
+      p.row(0) = x.row(i);
+      p.row(1) = x.row(i);
+      p(0, a) += h;
+      p(1, a) -= h;
+      const Eigen::MatrixXd f = field.values(p);
+      const double difference = (f(0, 0) - f(1, 0)) / (2 * h);
+      EXPECT_NEAR(gradient(i, a), difference, std::max(1e-5, tolerance) * (1 + std::abs(difference)));
+    }
+    EXPECT_EQ(gradient(i, 2), 0.0);
+  }
+  return image;
+}
+
+class OutputsTest : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(OutputsTest, SolutionAndMetricsMatchTheCheckpointField) {
+  const std::string precision = GetParam();
+  const double tolerance = precision == "double" ? 1e-12 : 2e-6;
+  const auto dir = scratch_dir();
+  const auto config = dir / "outputs.yaml", out = dir / "out";
+  write_text(config, outputs_config(precision));
+  Outcome o = run_nfield({"run", config.string(), "--out", out.string()}, dir, dir / "capture");
+  ASSERT_EQ(o.code, 0) << describe(o);
+  EXPECT_EQ(tree(out), (std::vector<std::string>{"checkpoint.h5", "config.yaml", "metrics.json",
+                                                  "solution.png", "solution.vti"}));
+
+  const io::ImageData image = check_solution(out / "solution.vti", out / "checkpoint.h5", 9, 7, tolerance);
+  const Eigen::MatrixXd& error = image.arrays.at("error_u");
+  const Eigen::MatrixXd& exact = image.arrays.at("exact_u");
+  const Eigen::MatrixXd& residual = image.arrays.at("residual");
+
+  const nlohmann::json metrics = read_json(out / "metrics.json");
+  EXPECT_EQ(metrics["problem"], "poisson");
+  EXPECT_EQ(metrics["finished"], true);
+  EXPECT_EQ(metrics["steps"], 25);
+  EXPECT_EQ(metrics["precision"], precision);
+  EXPECT_EQ(metrics["parameters"],
+            fields::load_field<double>(io::H5Reader(out / "checkpoint.h5")).parameter_count());
+  const double rel_l2 = std::sqrt(error.squaredNorm() / exact.squaredNorm());
+  EXPECT_NEAR(metrics["rel_l2"].get<double>(), rel_l2, 1e-12 * rel_l2);
+  EXPECT_EQ(metrics["max_abs_err"].get<double>(), error.cwiseAbs().maxCoeff());
+  const double residual_rms = std::sqrt(residual.squaredNorm() / static_cast<double>(residual.rows()));
+  EXPECT_NEAR(metrics["residual_rms"].get<double>(), residual_rms, 1e-12 * residual_rms);
+  double loss = 0;
+  for (const auto& [name, value] : metrics["losses"].items()) loss += value.get<double>();
+  EXPECT_EQ(metrics["losses"].size(), 2u);
+  EXPECT_NEAR(metrics["loss"].get<double>(), loss, 1e-12 * loss);
+  EXPECT_GT(rel_l2, 0);
+
+  // The resolved config is itself a valid config.
+  o = run_nfield({"validate", (out / "config.yaml").string()}, dir, dir / "capture");
+  EXPECT_EQ(o.code, 0) << describe(o);
+
+  // nfield eval: the same field on another grid.
+  const auto evaluated = dir / "eval17";
+  o = run_nfield({"eval", (out / "checkpoint.h5").string(), "--grid", "17", "--out", evaluated.string()},
+                 dir, dir / "capture");
+  ASSERT_EQ(o.code, 0) << describe(o);
+  check_solution(evaluated / "solution.vti", out / "checkpoint.h5", 17, 17, tolerance);
+  EXPECT_TRUE(std::filesystem::exists(evaluated / "config.yaml"));
+  expect_no_temporaries(evaluated);
+
+  // Without --out: beside the checkpoint, in eval/.
+  o = run_nfield({"eval", (out / "checkpoint.h5").string(), "--grid", "5"}, dir, dir / "capture");
+  ASSERT_EQ(o.code, 0) << describe(o);
+  check_solution(out / "eval" / "solution.vti", out / "checkpoint.h5", 5, 5, tolerance);
+}
+
+INSTANTIATE_TEST_SUITE_P(Precisions, OutputsTest, ::testing::Values("double", "float"));
+
+}  // namespace
+}  // namespace nfield::apps::testing

@@ -1,0 +1,199 @@
+// SPDX-License-Identifier: MIT
+// Running the nfield program from tests: a child process with its stdout read through a
+// pipe (line by line if wanted), its stderr kept, its exit code or signal reported.
+#pragma once
+
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
+#include <sys/types.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+namespace nfield::apps::testing {
+
+inline std::filesystem::path nfield_program() {
+  return std::filesystem::path(NFIELD_BINARY_DIR) / "bin" / "nfield";
+}
+
+// An empty folder <build>/test_scratch/apps/<suite>.<test>, emptied again on each call.
+inline std::filesystem::path scratch_dir() {
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  std::string name = std::string(info->test_suite_name()) + "." + info->name();
+  std::replace(name.begin(), name.end(), '/', '_');
+  const auto dir = std::filesystem::path(NFIELD_BINARY_DIR) / "test_scratch" / "apps" / name;
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+inline void write_text(const std::filesystem::path& path, const std::string& text) {
+  std::ofstream(path, std::ios::binary) << text;
+}
+
+inline std::string read_text(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// Every file and folder below `dir`, as paths relative to it, sorted.
+inline std::vector<std::string> tree(const std::filesystem::path& dir) {
+  std::vector<std::string> names;
+  for (const auto& e : std::filesystem::recursive_directory_iterator(dir))
+    names.push_back(std::filesystem::relative(e.path(), dir).string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+struct Outcome {
+  int code = -1;        // exit status; 128 + N when killed by signal N
+  bool signaled = false;
+  std::string out, err;
+};
+
+// A running `nfield ARGS...` in folder `cwd`; stdout comes through a pipe, stderr goes to
+// `stderr_file` (outside the folders under test).
+class Child {
+ public:
+  Child(const std::vector<std::string>& args, const std::filesystem::path& cwd,
+        std::filesystem::path stderr_file, int pipe_bytes = 0)
+      : stderr_file_(std::move(stderr_file)) {
+    int fds[2];
+    if (pipe(fds) != 0) throw std::runtime_error("pipe failed");
+    // A small pipe holds the child back once the reader stops reading.
+    if (pipe_bytes > 0) fcntl(fds[0], F_SETPIPE_SZ, pipe_bytes);
+    std::vector<std::string> argv_text{nfield_program().string()};
+    argv_text.insert(argv_text.end(), args.begin(), args.end());
+    std::vector<char*> argv;
+    for (auto& a : argv_text) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    const std::string err_path = stderr_file_.string();
+    const std::string dir = cwd.string();
+    pid_ = fork();
+    if (pid_ < 0) throw std::runtime_error("fork failed");
+    if (pid_ == 0) {
+      if (chdir(dir.c_str()) != 0) _exit(126);
+      const int err = open(err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+      if (err < 0) _exit(126);
+      dup2(fds[1], 1);
+      dup2(err, 2);
+      close(fds[0]);
+      close(fds[1]);
+      close(err);
+      execv(argv[0], argv.data());
+      _exit(127);
+    }
+    close(fds[1]);
+    out_ = fds[0];
+  }
+  ~Child() {
+    if (out_ >= 0) close(out_);
+    if (pid_ > 0 && !reaped_) {
+      kill(pid_, SIGKILL);
+      waitpid(pid_, nullptr, 0);
+    }
+  }
+  Child(const Child&) = delete;
+  Child& operator=(const Child&) = delete;
+
+  pid_t pid() const { return pid_; }
+
+  // The next line of stdout (without '\n'); false at end of output or after `timeout`.
+  bool read_line(std::string& line, std::chrono::seconds timeout = std::chrono::seconds(60)) {
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    while (true) {
+      const auto newline = buffer_.find('\n');
+      if (newline != std::string::npos) {
+        line = buffer_.substr(0, newline);
+        buffer_.erase(0, newline + 1);
+        return true;
+      }
+      if (eof_) {
+        if (buffer_.empty()) return false;
+        line.swap(buffer_);
+        buffer_.clear();
+        return true;
+      }
+      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+                            deadline - std::chrono::steady_clock::now())
+                            .count();
+      if (left <= 0) return false;
+      pollfd p{out_, POLLIN, 0};
+      const int ready = poll(&p, 1, static_cast<int>(left));
+      if (ready < 0 && errno == EINTR) continue;
+      if (ready <= 0) return false;
+      char chunk[4096];
+      const ssize_t n = read(out_, chunk, sizeof chunk);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) {
+        eof_ = true;
+      } else {
+        buffer_.append(chunk, static_cast<size_t>(n));
+        all_.append(chunk, static_cast<size_t>(n));
+      }
+    }
+  }
+
+  // Reads stdout to its end and waits for the exit (killing the child after `timeout`).
+  Outcome finish(std::chrono::seconds timeout = std::chrono::seconds(120)) {
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    std::string line;
+    while (std::chrono::steady_clock::now() < deadline) {
+      const auto left = std::chrono::duration_cast<std::chrono::seconds>(
+          deadline - std::chrono::steady_clock::now());
+      if (!read_line(line, std::max(left, std::chrono::seconds(1))) && eof_) break;
+    }
+    Outcome o;
+    if (!eof_) {
+      ADD_FAILURE() << "nfield did not finish within " << timeout.count() << " s; killed";
+      kill(pid_, SIGKILL);
+    }
+    int status = 0;
+    while (waitpid(pid_, &status, 0) < 0 && errno == EINTR) {
+    }
+    reaped_ = true;
+    if (WIFEXITED(status)) {
+      o.code = WEXITSTATUS(status);
+    } else if (WIFSIGNALED(status)) {
+      o.signaled = true;
+      o.code = 128 + WTERMSIG(status);
+    }
+    o.out = all_;
+    o.err = read_text(stderr_file_);
+    return o;
+  }
+
+ private:
+  pid_t pid_ = -1;
+  int out_ = -1;
+  bool eof_ = false;
+  bool reaped_ = false;
+  std::string buffer_, all_;
+  std::filesystem::path stderr_file_;
+};
+
+// Runs `nfield ARGS...` in `cwd` to its end; stderr is kept in `capture_dir`/stderr.txt.
+inline Outcome run_nfield(const std::vector<std::string>& args, const std::filesystem::path& cwd,
+                          const std::filesystem::path& capture_dir) {
+  std::filesystem::create_directories(capture_dir);
+  Child child(args, cwd, capture_dir / "stderr.txt");
+  return child.finish();
+}
+
+inline std::string describe(const Outcome& o) {
+  return "exit " + std::to_string(o.code) + (o.signaled ? " (signal)" : "") + "\n--- stdout:\n" +
+         o.out + "--- stderr:\n" + o.err;
+}
+
+}  // namespace nfield::apps::testing

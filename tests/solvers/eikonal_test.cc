@@ -1,0 +1,333 @@
+// SPDX-License-Identifier: MIT
+//
+// The eikonal problem (solvers/eikonal.cc): the nonlinear residual's backward pass is the
+// adjoint of its evaluate (central differences, plain and factored, 2D and 3D); the exact
+// first-arrival time of the two-layer medium equals a brute-force search over interface
+// crossing points (direct, head and refracted waves) and satisfies |∇T| = 1/v; a short
+// factored run learns the constant-speed cone.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "solvers/run.h"
+#include "solvers/trainer.h"
+
+namespace nfield::solvers {
+namespace {
+
+std::filesystem::path write_config(const std::string& name, const std::string& text) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "nfield_eikonal_test";
+  std::filesystem::create_directories(dir);
+  const std::filesystem::path path = dir / (name + ".yaml");
+  std::ofstream(path) << text;
+  return path;
+}
+
+double uniform(std::mt19937_64& rng, double lo, double hi) {
+  return lo + (hi - lo) * static_cast<double>(rng() >> 11) * 0x1.0p-53;
+}
+
+// Σ r̄ ⊙ r(out) for the residual on points [first, first + out.points).
+double pairing(const Residual& residual, Eigen::Index first, const autodiff::StreamLayout& layout,
+               const autodiff::Streams<double>& out, const Eigen::MatrixXd& r_bar) {
+  Eigen::MatrixXd r;
+  residual.evaluate(first, layout, out, r);
+  return (r.array() * r_bar.array()).sum();
+}
+
+// backward() against central differences of evaluate(), entry by entry of the streams, on
+// the block of points [first, first + count) of the set.
+void check_adjoint(const Residual& residual, const autodiff::StreamLayout& layout,
+                   Eigen::Index first, Eigen::Index count, std::mt19937_64& rng) {
+  autodiff::Streams<double> out;
+  out.resize(count, layout.count(), 1);
+  for (Eigen::Index i = 0; i < out.data.rows(); ++i) out.data(i, 0) = uniform(rng, -1, 1);
+  Eigen::MatrixXd r_bar(count, residual.components());
+  for (Eigen::Index i = 0; i < r_bar.size(); ++i) r_bar.data()[i] = uniform(rng, -1, 1);
+  autodiff::Streams<double> adjoint;
+  adjoint.resize(count, layout.count(), 1);
+  adjoint.data.setZero();
+  residual.backward(first, layout, out, r_bar, adjoint);
+  const double h = 1e-6;
+  double worst = 0;
+  for (Eigen::Index i = 0; i < out.data.rows(); ++i) {
+    autodiff::Streams<double> plus = out, minus = out;
+    plus.data(i, 0) += h;
+    minus.data(i, 0) -= h;
+    const double fd = (pairing(residual, first, layout, plus, r_bar) -
+                       pairing(residual, first, layout, minus, r_bar)) / (2 * h);
+    worst = std::max(worst, std::abs(fd - adjoint.data(i, 0)) / (1 + std::abs(fd)));
+  }
+  EXPECT_LT(worst, 1e-7);
+}
+
+void check_pde_adjoint(const std::string& config) {
+  const RunSetup setup = load_run(write_config("adjoint", config), {});
+  const LossTerm& pde = setup.problem->loss_terms().at(0);
+  ASSERT_EQ(pde.name, "pde");
+  std::mt19937_64 rng(5);
+  Random sampler(3);
+  const Eigen::MatrixXd x = pde.sample(sampler, 24);
+  const auto residual = pde.residual(x);
+  const autodiff::StreamLayout layout(pde.spec);
+  check_adjoint(*residual, layout, 0, 24, rng);
+  check_adjoint(*residual, layout, 8, 16, rng);  // a later block: per-point data by index
+}
+
+TEST(Eikonal, ResidualAdjointMatchesFiniteDifferences) {
+  for (const char* factored : {"false", "true"}) {
+    SCOPED_TRACE(factored);
+    check_pde_adjoint(std::string(R"(
+problem: eikonal
+domain: {lower: [0, 0], upper: [1, 1]}
+equation: {source: [0.5, 0.25], speed: "1 + 0.5*x*y", factored: )") + factored + R"(}
+training: {batch: {interior: 64, source: 1}}
+)");
+    check_pde_adjoint(std::string(R"(
+problem: eikonal
+domain: {lower: [-1, -1, -1], upper: [1, 1, 1]}
+equation:
+  source: [0.1, -0.2, 0.3]
+  layers: {axis: z, interface: 0.5, speeds: [1, 3]}
+  factored: )") + factored + R"(
+training: {batch: {interior: 64, source: 1}}
+)");
+  }
+}
+
+TEST(Eikonal, SourceTermAndFactoredExact) {
+  for (const bool factored : {false, true}) {
+    const RunSetup setup = load_run(write_config("source", std::string(R"(
+problem: eikonal
+domain: {lower: [0, 0], upper: [1, 1]}
+equation: {source: [0.5, 0.25], speed: "2", factored: )") + (factored ? "true" : "false") + R"(}
+training: {batch: {interior: 64, source: 3}}
+)"), {});
+    const auto terms = setup.problem->loss_terms();
+    ASSERT_EQ(terms.size(), 2u);
+    EXPECT_EQ(terms[1].name, "source");
+    EXPECT_EQ(terms[1].batch_key, "source");
+    Random rng(1);
+    const Eigen::MatrixXd x = terms[1].sample(rng, 3);
+    ASSERT_EQ(x.rows(), 3);
+    for (Eigen::Index p = 0; p < 3; ++p) EXPECT_EQ(x.row(p), Eigen::RowVector2d(0.5, 0.25));
+    const autodiff::StreamLayout layout(terms[1].spec);
+    autodiff::Streams<double> out;
+    out.resize(3, layout.count(), 1);
+    out.data.setConstant(0.75);
+    Eigen::MatrixXd r;
+    terms[1].residual(x)->evaluate(0, layout, out, r);
+    EXPECT_NEAR(r(0, 0), factored ? -0.25 : 0.75, 1e-15);
+    // Exact: u = |x − x₀|/2, or τ ≡ 1 when factored.
+    Eigen::MatrixXd points(2, 2);
+    points << 0.1, 0.9, 0.5, 0.25;
+    const Eigen::MatrixXd exact = setup.problem->exact(points);
+    if (factored) {
+      EXPECT_NEAR(exact(0, 0), 1, 1e-14);
+      EXPECT_NEAR(exact(1, 0), 1, 1e-14);
+    } else {
+      EXPECT_NEAR(exact(0, 0), std::hypot(0.4, 0.65) / 2, 1e-14);
+      EXPECT_EQ(exact(1, 0), 0);
+    }
+  }
+}
+
+// Brute force in 2D, interface y = c: the best of the direct ray, every path through one
+// interface point p (receivers across), and every path x₀ → (p, c) → (q, c) → x along the
+// interface in the other layer (receivers on the source's side), by coarse-to-fine grid
+// search over p (and q); the travel times are convex in (p, q).
+double brute_force_time(double v_source, double v_other, double c, const Eigen::Vector2d& x0,
+                        const Eigen::Vector2d& x) {
+  const bool same = (x0(1) < c) == (x(1) < c);
+  const double v_receiver = same ? v_source : v_other;
+  auto leg = [c](const Eigen::Vector2d& a, double p) { return std::hypot(a(0) - p, a(1) - c); };
+  double best = same ? (x - x0).norm() / v_source : std::numeric_limits<double>::infinity();
+  if (!same) {
+    double lo = -3, hi = 4;
+    for (int level = 0; level < 8; ++level) {
+      const int n = 2001;
+      double arg = lo, value = std::numeric_limits<double>::infinity();
+      for (int i = 0; i < n; ++i) {
+        const double p = lo + (hi - lo) * i / (n - 1);
+        const double t = leg(x0, p) / v_source + leg(x, p) / v_receiver;
+        if (t < value) value = t, arg = p;
+      }
+      best = std::min(best, value);
+      const double step = (hi - lo) / (n - 1);
+      lo = arg - 3 * step;
+      hi = arg + 3 * step;
+    }
+    return best;
+  }
+  double plo = -3, phi = 4, qlo = -3, qhi = 4;
+  const int n = 801;
+  std::vector<double> tp(n), tq(n);
+  for (int level = 0; level < 8; ++level) {
+    for (int i = 0; i < n; ++i) {
+      tp[i] = leg(x0, plo + (phi - plo) * i / (n - 1)) / v_source;
+      tq[i] = leg(x, qlo + (qhi - qlo) * i / (n - 1)) / v_source;
+    }
+    int bi = 0, bj = 0;
+    double value = std::numeric_limits<double>::infinity();
+    for (int i = 0; i < n; ++i) {
+      const double p = plo + (phi - plo) * i / (n - 1);
+      for (int j = 0; j < n; ++j) {
+        const double q = qlo + (qhi - qlo) * j / (n - 1);
+        const double t = tp[i] + std::abs(q - p) / v_other + tq[j];
+        if (t < value) value = t, bi = i, bj = j;
+      }
+    }
+    best = std::min(best, value);
+    const double sp = (phi - plo) / (n - 1), sq = (qhi - qlo) / (n - 1);
+    const double bp = plo + sp * bi, bq = qlo + sq * bj;
+    plo = bp - 3 * sp, phi = bp + 3 * sp, qlo = bq - 3 * sq, qhi = bq + 3 * sq;
+  }
+  return best;
+}
+
+std::string layered_config(double v1, double v2, const std::string& source = "[0.5, 0.25]") {
+  char text[512];
+  std::snprintf(text, sizeof text, R"(
+problem: eikonal
+domain: {lower: [0, 0], upper: [1, 1]}
+equation:
+  source: %s
+  layers: {axis: y, interface: 0.5, speeds: [%g, %g]}
+training: {batch: {interior: 64, source: 1}}
+)", source.c_str(), v1, v2);
+  return text;
+}
+
+TEST(Eikonal, LayeredExactMatchesBruteForce) {
+  struct Case {
+    double v1, v2;
+    std::string source;
+  };
+  // Slow source layer (head waves), fast source layer, source above the interface.
+  for (const Case& c : {Case{1, 2, "[0.5, 0.25]"}, Case{2, 1, "[0.5, 0.25]"}, Case{1, 3, "[0.3, 0.8]"}}) {
+    SCOPED_TRACE(c.source + " " + std::to_string(c.v1) + " " + std::to_string(c.v2));
+    const RunSetup setup = load_run(write_config("layered", layered_config(c.v1, c.v2, c.source)), {});
+    std::mt19937_64 rng(11);
+    Eigen::MatrixXd x(40, 2);
+    for (Eigen::Index p = 0; p < x.rows(); ++p) x.row(p) << uniform(rng, 0, 1), uniform(rng, 0, 1);
+    // Receivers where head waves arrive first (slow layer near the interface, far off).
+    x.row(0) << 0.0, 0.45;
+    x.row(1) << 1.0, 0.49;
+    x.row(2) << 0.02, 0.3;
+    const Eigen::VectorXd t = setup.problem->exact(x).col(0);
+    const Eigen::Vector2d x0 = c.source == "[0.5, 0.25]" ? Eigen::Vector2d(0.5, 0.25) : Eigen::Vector2d(0.3, 0.8);
+    const double v_source = x0(1) < 0.5 ? c.v1 : c.v2, v_other = x0(1) < 0.5 ? c.v2 : c.v1;
+    int head_first = 0;
+    for (Eigen::Index p = 0; p < x.rows(); ++p) {
+      const Eigen::Vector2d xp = x.row(p).transpose();
+      const double brute = brute_force_time(v_source, v_other, 0.5, x0, xp);
+      EXPECT_NEAR(t(p), brute, 1e-9 * (1 + brute)) << "at " << xp.transpose();
+      const bool same = (x0(1) < 0.5) == (xp(1) < 0.5);
+      if (same && t(p) < (xp - x0).norm() / v_source - 1e-9) ++head_first;
+    }
+    if (v_other > v_source) EXPECT_GE(head_first, 3);  // the head wave cases are exercised
+    if (v_other < v_source) EXPECT_EQ(head_first, 0);
+  }
+}
+
+TEST(Eikonal, LayeredExactIn3DIsTheRotated2DSolution) {
+  const RunSetup flat = load_run(write_config("flat", layered_config(1, 2)), {});
+  const RunSetup solid = load_run(write_config("solid", R"(
+problem: eikonal
+domain: {lower: [0, 0, 0], upper: [1, 1, 1]}
+equation:
+  source: [0.5, 0.25, 0.4]
+  layers: {axis: y, interface: 0.5, speeds: [1, 2]}
+training: {batch: {interior: 64, source: 1}}
+)"), {});
+  std::mt19937_64 rng(2);
+  Eigen::MatrixXd x(30, 3), x2(30, 2);
+  for (Eigen::Index p = 0; p < x.rows(); ++p) {
+    x.row(p) << uniform(rng, 0, 1), uniform(rng, 0, 1), uniform(rng, 0, 1);
+    x2.row(p) << 0.5 + std::hypot(x(p, 0) - 0.5, x(p, 2) - 0.4), x(p, 1);
+  }
+  const Eigen::VectorXd t3 = solid.problem->exact(x).col(0), t2 = flat.problem->exact(x2).col(0);
+  EXPECT_LT((t3 - t2).cwiseAbs().maxCoeff(), 1e-12);
+}
+
+TEST(Eikonal, LayeredExactSolvesTheEikonalEquation) {
+  for (const auto& [v1, v2] : {std::pair{1.0, 2.0}, std::pair{2.0, 1.0}}) {
+    const RunSetup setup = load_run(write_config("gradient", layered_config(v1, v2)), {});
+    const Eigen::Vector2d x0(0.5, 0.25);
+    std::mt19937_64 rng(3);
+    const double h = 1e-6;
+    int checked = 0;
+    for (int k = 0; k < 400; ++k) {
+      const Eigen::Vector2d x(uniform(rng, 0, 1), uniform(rng, 0, 1));
+      if ((x - x0).norm() < 0.05 || std::abs(x(1) - 0.5) < 0.01) continue;
+      Eigen::MatrixXd stencil(4, 2);
+      stencil << x(0) + h, x(1), x(0) - h, x(1), x(0), x(1) + h, x(0), x(1) - h;
+      const Eigen::VectorXd t = setup.problem->exact(stencil).col(0);
+      const double gx = (t(0) - t(1)) / (2 * h), gy = (t(2) - t(3)) / (2 * h);
+      const double slowness = 1 / (x(1) < 0.5 ? v1 : v2);
+      EXPECT_NEAR(std::hypot(gx, gy), slowness, 1e-6) << "at " << x.transpose();
+      ++checked;
+    }
+    EXPECT_GT(checked, 300);
+  }
+}
+
+TEST(Eikonal, ConfigErrors) {
+  EXPECT_THROW(load_run(write_config("both", R"(
+problem: eikonal
+domain: {lower: [0, 0], upper: [1, 1]}
+equation: {source: [0.5, 0.5], speed: "1", layers: {axis: y, interface: 0.5, speeds: [1, 2]}}
+training: {batch: {interior: 64, source: 1}}
+)"), {}), io::ConfigError);
+  EXPECT_THROW(load_run(write_config("outside", R"(
+problem: eikonal
+domain: {lower: [0, 0], upper: [1, 1]}
+equation: {source: [1.5, 0.5], speed: "1"}
+training: {batch: {interior: 64, source: 1}}
+)"), {}), io::ConfigError);
+  EXPECT_THROW(load_run(write_config("no_source_batch", R"(
+problem: eikonal
+domain: {lower: [0, 0], upper: [1, 1]}
+equation: {source: [0.5, 0.5], speed: "1"}
+training: {batch: {interior: 64}}
+)"), {}), io::ConfigError);
+}
+
+TEST(Eikonal, TinyFactoredRunLearnsTheCone) {
+  const std::filesystem::path out = std::filesystem::temp_directory_path() / "nfield_eikonal_test" / "tiny_out";
+  std::filesystem::remove_all(out);
+  RunSetup setup = load_run(write_config("tiny", R"(
+problem: eikonal
+domain: {lower: [0, 0], upper: [1, 1]}
+equation: {source: [0.3, 0.6], speed: "2", factored: true}
+field: {type: siren, hidden: [16, 16], first_omega: 3, hidden_omega: 1}
+training:
+  seed: 1
+  threads: 2
+  batch: {interior: 256, source: 1}
+  stages:
+    - {optimizer: adam, steps: 200, lr: 5.0e-3, schedule: cosine, lr_final: 1.0e-4}
+output: {grid: [32, 32], png: false}
+)"), {}, out);
+  ASSERT_EQ(execute_run(setup), 0);
+  std::ifstream metrics(out / "metrics.json");
+  const std::string text((std::istreambuf_iterator<char>(metrics)), std::istreambuf_iterator<char>());
+  const auto at = text.find("\"travel_time_rel_l2\": ");
+  ASSERT_NE(at, std::string::npos) << text;
+  const double rel_l2 = std::stod(text.substr(at + 22));
+  std::printf("tiny factored eikonal run: travel_time_rel_l2 %.3e\n", rel_l2);
+  EXPECT_LT(rel_l2, 1e-2);
+  EXPECT_TRUE(std::filesystem::exists(out / "travel_time.vti"));
+  std::filesystem::remove_all(out);
+}
+
+}  // namespace
+}  // namespace nfield::solvers

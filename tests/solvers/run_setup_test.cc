@@ -1,0 +1,160 @@
+// SPDX-License-Identifier: MIT
+//
+// load_run (solvers/run.h) below the program: bad configs raise io::ConfigError (never
+// another exception) with file, line, column and key path; the resolved config reads back
+// to itself; and the trainer's saved state resumes an interrupted Adam run bit for bit.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "fields/field_io.h"
+#include "io/hdf5_file.h"
+#include "solvers/run.h"
+#include "solvers/trainer.h"
+
+namespace nfield::solvers {
+namespace {
+
+std::filesystem::path scratch_dir() {
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  std::string name = std::string(info->test_suite_name()) + "." + info->name();
+  std::replace(name.begin(), name.end(), '/', '_');
+  const auto dir = std::filesystem::path(NFIELD_BINARY_DIR) / "test_scratch" / "solvers" / name;
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+std::filesystem::path write_config(const std::string& text) {
+  const auto path = scratch_dir() / "config.yaml";
+  std::ofstream(path) << text;
+  return path;
+}
+
+constexpr const char* kPoisson =
+    "problem: poisson\n"                                   // 1
+    "domain: {lower: [0, 0], upper: [1, 1]}\n"             // 2
+    "equation:\n"                                          // 3
+    "  source: \"-2*pi^2*sin(pi*x)*sin(pi*y)\"\n"          // 4
+    "  exact: \"sin(pi*x)*sin(pi*y)\"\n"                   // 5
+    "conditions:\n"                                        // 6
+    "  - {on: boundary, type: dirichlet, value: \"0\"}\n"  // 7
+    "field: {type: siren, hidden: [8, 8], first_omega: 3, hidden_omega: 1}\n"  // 8
+    "training:\n"                                          // 9
+    "  seed: 5\n"                                          // 10
+    "  threads: 1\n"                                       // 11
+    "  batch: {interior: 64, boundary: 32}\n"              // 12
+    "  resample_every: 3\n"                                // 13
+    "  stages:\n"                                          // 14
+    "    - {optimizer: adam, steps: 20, lr: 3.0e-3, schedule: cosine, lr_final: 1.0e-4}\n"  // 15
+    "output: {grid: [5, 5]}\n";                            // 16
+
+std::string replaced(const std::string& from, const std::string& to) {
+  std::string text = kPoisson;
+  const auto at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  return text.replace(at, from.size(), to);
+}
+
+struct Located {
+  int line, column;
+  std::string key_path, part;
+};
+
+void expect_config_error(const std::string& text, const Located& want) {
+  const auto path = write_config(text);
+  try {
+    load_run(path, {});
+    ADD_FAILURE() << "no error for\n" << text;
+  } catch (const io::ConfigError& e) {
+    EXPECT_EQ(e.file(), path.string());
+    EXPECT_EQ(e.line(), want.line) << e.what();
+    EXPECT_EQ(e.column(), want.column) << e.what();
+    EXPECT_EQ(e.key_path(), want.key_path) << e.what();
+    EXPECT_NE(std::string(e.what()).find(want.part), std::string::npos) << e.what();
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "not a ConfigError: " << e.what();
+  }
+}
+
+TEST(LoadRun, ExpressionInValueListIsAConfigError) {
+  // Column 45: the opening quote of the list element.
+  expect_config_error(replaced("value: \"0\"}", "value: [\"sin(pi*x\"]}"),
+                      {7, 45, "conditions[0].value[0]", "in expression 'sin(pi*x'"});
+}
+
+TEST(LoadRun, EmptyFaceListIsAConfigError) {
+  expect_config_error(replaced("on: boundary", "on: []"),
+                      {7, 10, "conditions[0].on", "expected a face name"});
+}
+
+TEST(LoadRun, MisspelledBatchKeyIsAConfigError) {
+  expect_config_error(replaced("interior: 64", "interor: 64"),
+                      {12, 11, "training.batch", "unknown key 'interor'"});
+}
+
+TEST(LoadRun, UnusedDefaultBatchKeyIsAccepted) {
+  // `initial` is a batch of its own for time-dependent problems; listing it is no typo.
+  EXPECT_NO_THROW(load_run(write_config(replaced("boundary: 32}", "boundary: 32, initial: 8}")), {}));
+}
+
+TEST(LoadRun, ResolvedConfigReadsBackToItself) {
+  const RunSetup first = load_run(write_config(kPoisson), {});
+  const std::string text = io::to_yaml(first.resolved);
+  const auto again_path = scratch_dir() / "resolved.yaml";
+  std::ofstream(again_path) << text;
+  const RunSetup again = load_run(again_path, {});
+  EXPECT_EQ(io::to_yaml(again.resolved), text);
+  EXPECT_EQ(again.training.total_steps(), 20);
+  EXPECT_EQ(again.output.grid, (std::vector<int>{5, 5}));
+}
+
+// ---- trainer state -----------------------------------------------------------------
+
+template <typename Scalar>
+void expect_resume_bit_exact() {
+  const auto path = write_config(kPoisson);
+  RunSetup setup = load_run(path, {});
+  const auto checkpoint = path.parent_path() / "state.h5";
+
+  fields::Field<Scalar> full(setup.field);
+  {
+    Trainer<Scalar> trainer(*setup.problem, full, setup.training);
+    ASSERT_TRUE(trainer.run({}));
+    EXPECT_EQ(trainer.step(), 20);
+  }
+
+  // Stopped before step 8 (not a multiple of resample_every: the saved points matter).
+  fields::Field<Scalar> first(setup.field);
+  {
+    Trainer<Scalar> trainer(*setup.problem, first, setup.training);
+    typename Trainer<Scalar>::Callbacks callbacks;
+    callbacks.stop_requested = [&trainer] { return trainer.step() >= 7; };
+    ASSERT_FALSE(trainer.run(callbacks));
+    EXPECT_EQ(trainer.step(), 7);
+    io::H5Writer file(checkpoint);
+    fields::save_field(file, first);
+    trainer.save_state(file);
+    file.commit();
+  }
+  EXPECT_FALSE(std::filesystem::exists(checkpoint.string() + ".tmp"));
+
+  const io::H5Reader file(checkpoint);
+  fields::Field<Scalar> resumed = fields::load_field<Scalar>(file);
+  Trainer<Scalar> trainer(*setup.problem, resumed, setup.training);
+  trainer.load_state(file);
+  EXPECT_EQ(trainer.step(), 7);
+  ASSERT_TRUE(trainer.run({}));
+  EXPECT_EQ(trainer.step(), 20);
+  ASSERT_EQ(resumed.parameters().size(), full.parameters().size());
+  for (Eigen::Index i = 0; i < full.parameters().size(); ++i)
+    ASSERT_EQ(resumed.parameters()(i), full.parameters()(i)) << "parameter " << i;
+}
+
+TEST(TrainerState, ResumedAdamRunIsBitExactDouble) { expect_resume_bit_exact<double>(); }
+TEST(TrainerState, ResumedAdamRunIsBitExactFloat) { expect_resume_bit_exact<float>(); }
+
+}  // namespace
+}  // namespace nfield::solvers
