@@ -34,9 +34,10 @@
 //         1D  G = (i/2k) e^{ik|x|}      2D  G = (i/4) H₀⁽¹⁾(k r)      3D  G = e^{ikr}/(4πr).
 //
 //     exact() is the free-space solution of the smoothed source itself: G for r ≥ 8σ, and the
-//     radial convolution ∫ f(s) s^{d−1} M(r, s) ds (M the spherical mean of G, by the
-//     addition theorem: 2D M = 2π (i/4) J₀(k r<) H₀⁽¹⁾(k r>)) by Gauss–Legendre quadrature
-//     inside, so it is finite at x₀ and equals G away from it.
+//     radial convolution u(r) = −∫ f(s) s^{d−1} M(r, s) ds (M(r, s) the integral of G over
+//     the sphere of radius s about x₀, seen from distance r; by the addition theorem, in 2D
+//     M = 2π (i/4) J₀(k r<) H₀⁽¹⁾(k r>), r< and r> the smaller and larger of r, s) by
+//     Gauss–Legendre quadrature inside: finite at x₀, equal to G away from it.
 //
 //         source_center: [0, 0]       # x₀ (default: the origin); must lie in the domain
 //         source_width: 0.05          # σ
@@ -205,7 +206,9 @@ class Helmholtz final : public Problem {
                      "expected a strength >= 0");
     if (pml_width_ > 0) equation.require("wavenumber", k_ > 0, "the layer needs a wavenumber k > 0");
     equation.reject_unknown_keys();
-    conditions_ = condition_terms(context.root.child_or_empty("conditions"), domain_, channels);
+    // (condition_terms rejects the empty mapping child_or_empty gives for a missing section.)
+    if (context.root.has("conditions"))
+      conditions_ = condition_terms(context.root.child("conditions"), domain_, channels);
   }
 
   const Domain& domain() const override { return domain_; }
@@ -381,12 +384,13 @@ class Helmholtz final : public Problem {
     std::vector<double> edges{0, r};
     while (edges.back() < reach) edges.push_back(std::min(2 * edges.back(), reach));
     const double inv = 1 / (2 * width_ * width_);
+    // u = G ∗ (−f): G answers −δ.
     Complex sum = 0;
     for (size_t panel = 0; panel + 1 < edges.size(); ++panel) {
       const double a = edges[panel], b = edges[panel + 1];
       for (size_t q = 0; q < nodes.size(); ++q) {
         const double s = 0.5 * (a + b) + 0.5 * (b - a) * nodes[q];
-        const double radial = amplitude_ * std::exp(-s * s * inv) * std::pow(s, d - 1);
+        const double radial = -amplitude_ * std::exp(-s * s * inv) * std::pow(s, d - 1);
         sum += 0.5 * (b - a) * weights[q] * radial * sphere_integral(d, k_, r, s);
       }
     }

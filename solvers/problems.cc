@@ -5,6 +5,7 @@ namespace nfield::solvers {
 
 void register_problems(Registry<ProblemFactory>& registry) {
   registry.add("poisson", make_poisson);
+  registry.add("poisson_image", make_poisson_image);
   registry.add("wave", make_wave);
   registry.add("helmholtz", make_helmholtz);
   registry.add("eikonal", make_eikonal);

@@ -10,6 +10,7 @@
 namespace nfield::solvers {
 
 std::unique_ptr<Problem> make_poisson(const ProblemContext& context);
+std::unique_ptr<Problem> make_poisson_image(const ProblemContext& context);
 std::unique_ptr<Problem> make_wave(const ProblemContext& context);
 std::unique_ptr<Problem> make_helmholtz(const ProblemContext& context);
 std::unique_ptr<Problem> make_eikonal(const ProblemContext& context);

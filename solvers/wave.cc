@@ -53,7 +53,9 @@ class Wave final : public Problem {
     if (equation.has("exact"))
       exact_ = std::make_shared<io::Expression>(equation.get_expression("exact", vars));
     equation.reject_unknown_keys();
-    conditions_ = condition_terms(context.root.child_or_empty("conditions"), domain_, 1);
+    // (condition_terms rejects the empty mapping child_or_empty gives for an absent key.)
+    if (context.root.has("conditions"))
+      conditions_ = condition_terms(context.root.child("conditions"), domain_, 1);
   }
 
   const Domain& domain() const override { return domain_; }

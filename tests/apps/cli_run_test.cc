@@ -83,7 +83,7 @@ void expect_same_datasets(const std::filesystem::path& a_path, const std::filesy
 
 class ResumeTest : public ::testing::TestWithParam<std::string> {};
 
-constexpr int kSteps = 90;
+constexpr int kSteps = 80;
 
 std::string resume_config(const std::string& precision) {
   return poisson_config("{lower: [0, 0], upper: [1, 1]}",
@@ -111,9 +111,9 @@ TEST_P(ResumeTest, InterruptedRunResumesBitExact) {
   ASSERT_EQ(o.code, 0) << describe(o);
   expect_no_temporaries(uninterrupted);
 
-  // Interrupt after step 20. The child writes a line per step into a pipe of 4 KiB, so it
-  // cannot get more than some 40 steps ahead of the lines read here: it stops long before
-  // the end.
+  // Interrupt after step 20. The child writes a line (some 95 bytes) per step into a pipe
+  // of 4 KiB, so it cannot get more than some 45 steps ahead of the lines read here: it
+  // stops before the end however late the signal comes.
   long stopped_after = 0;
   {
     Child child({"run", config.string(), "--out", interrupted.string()}, dir, dir / "stderr.txt", 4096);
@@ -178,7 +178,7 @@ INSTANTIATE_TEST_SUITE_P(Precisions, ResumeTest, ::testing::Values("double", "fl
 TEST(Resume, CheckpointOfAnotherFieldWritesNothing) {
   const auto dir = scratch_dir();
   const std::string training =
-      "  threads: 1\n  batch: {interior: 32, boundary: 16}\n"
+      "  threads: 2\n  batch: {interior: 32, boundary: 16}\n"
       "  stages:\n    - {optimizer: adam, steps: 2, lr: 1.0e-3}\n";
   write_text(dir / "small.yaml", poisson_config("{lower: [0, 0], upper: [1, 1]}", training, "{grid: [5, 5]}"));
   std::string other = poisson_config("{lower: [0, 0], upper: [1, 1]}", training, "{grid: [5, 5]}");
@@ -207,10 +207,10 @@ std::string outputs_config(const std::string& precision) {
   return poisson_config("{lower: [0, -0.5], upper: [2, 1]}",
                         "  seed: 3\n"
                         "  precision: " + precision + "\n"
-                        "  threads: 1\n"
-                        "  batch: {interior: 128, boundary: 32}\n"
+                        "  threads: 2\n"
+                        "  batch: {interior: 64, boundary: 16}\n"
                         "  stages:\n"
-                        "    - {optimizer: adam, steps: 25, lr: 5.0e-3}\n",
+                        "    - {optimizer: adam, steps: 10, lr: 5.0e-3}\n",
                         "{grid: [9, 7]}");
 }
 
@@ -256,7 +256,7 @@ io::ImageData check_solution(const std::filesystem::path& vti, const std::filesy
       p(1, a) -= h;
       const Eigen::MatrixXd f = field.values(p);
       const double difference = (f(0, 0) - f(1, 0)) / (2 * h);
-      EXPECT_NEAR(gradient(i, a), difference, std::max(1e-5, tolerance) * (1 + std::abs(difference)));
+      EXPECT_NEAR(gradient(i, a), difference, std::max(1e-5, 10 * tolerance) * (1 + std::abs(difference)));
     }
     EXPECT_EQ(gradient(i, 2), 0.0);
   }
@@ -267,7 +267,7 @@ class OutputsTest : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(OutputsTest, SolutionAndMetricsMatchTheCheckpointField) {
   const std::string precision = GetParam();
-  const double tolerance = precision == "double" ? 1e-12 : 2e-6;
+  const double tolerance = precision == "double" ? 1e-12 : 1e-5;
   const auto dir = scratch_dir();
   const auto config = dir / "outputs.yaml", out = dir / "out";
   write_text(config, outputs_config(precision));
@@ -284,7 +284,7 @@ TEST_P(OutputsTest, SolutionAndMetricsMatchTheCheckpointField) {
   const nlohmann::json metrics = read_json(out / "metrics.json");
   EXPECT_EQ(metrics["problem"], "poisson");
   EXPECT_EQ(metrics["finished"], true);
-  EXPECT_EQ(metrics["steps"], 25);
+  EXPECT_EQ(metrics["steps"], 10);
   EXPECT_EQ(metrics["precision"], precision);
   EXPECT_EQ(metrics["parameters"],
             fields::load_field<double>(io::H5Reader(out / "checkpoint.h5")).parameter_count());

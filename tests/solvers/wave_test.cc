@@ -140,7 +140,7 @@ double max_utt(const Problem& problem, const Analytic& u) {
   return m;
 }
 
-const char* kStandingWave1d = R"(
+const char* kStandingWave1d = R"yaml(
 problem: wave
 domain: {lower: [0], upper: [1], time: [0, 1]}
 equation:
@@ -150,7 +150,7 @@ conditions:
   - {on: boundary, type: dirichlet, value: "0"}
   - {on: initial, type: value, value: "sin(pi*x) + 0.5*sin(4*pi*x)", weight: 10}
   - {on: initial, type: velocity, value: "0", weight: 10}
-)";
+)yaml";
 
 const Analytic kStanding = mode_1d(1.0, 1.0, 2 * kPi) + mode_1d(0.5, 4.0, 8 * kPi);
 
@@ -198,7 +198,7 @@ TEST(Wave, InitialVelocityResidual) {
             -4 * kPi * kPi * sx * st;
         return h;
       }};
-  const RunSetup setup = load_run(write_config("velocity", R"(
+  const RunSetup setup = load_run(write_config("velocity", R"yaml(
 problem: wave
 domain: {lower: [0], upper: [1], time: [0, 1]}
 equation: {speed: 2}
@@ -206,7 +206,7 @@ conditions:
   - {on: boundary, type: dirichlet, value: "0"}
   - {on: initial, type: value, value: "sin(pi*x)"}
   - {on: initial, type: velocity, value: "2*pi*sin(pi*x)"}
-)"), {});
+)yaml"), {});
   const auto terms = setup.problem->loss_terms();
   const LossTerm& velocity = term_named(terms, "initial_velocity");
   EXPECT_EQ(velocity.batch_key, "initial");
@@ -219,38 +219,38 @@ conditions:
 
 TEST(Wave, VaryingSpeedUsesTwoStreams) {
   // c(x) = 1 + x, u = sin(πx) cos t: f = u_tt − c²u_xx = (−1 + (1 + x)²π²) sin(πx) cos t.
-  const RunSetup setup = load_run(write_config("varying", R"(
+  const RunSetup setup = load_run(write_config("varying", R"yaml(
 problem: wave
 domain: {lower: [0], upper: [1], time: [0, 2]}
 equation:
   speed: "1 + x"
   source: "(-1 + (1 + x)^2*pi^2)*sin(pi*x)*cos(t)"
-)"), {});
+)yaml"), {});
   const auto terms = setup.problem->loss_terms();
   EXPECT_EQ(terms[0].spec.operators.size(), 2u);
   const Analytic u = mode_1d(1.0, 1.0, 1.0);
   const double scale = 4 * kPi * kPi;
   EXPECT_LT(max_residual(*setup.problem, terms[0], u), 1e-9 * scale);
   // The same u with c = 1 everywhere would leave (2x + x²)π² sin(πx) cos t.
-  const RunSetup wrong = load_run(write_config("varying_wrong", R"(
+  const RunSetup wrong = load_run(write_config("varying_wrong", R"yaml(
 problem: wave
 domain: {lower: [0], upper: [1], time: [0, 2]}
 equation:
   speed: 1
   source: "(-1 + (1 + x)^2*pi^2)*sin(pi*x)*cos(t)"
-)"), {});
+)yaml"), {});
   EXPECT_GT(max_residual(*wrong.problem, wrong.problem->loss_terms()[0], u), 1.0);
 }
 
 TEST(Wave, TwoDimensionalResidualVanishes) {
   // u = sin(πx) sin(πy) cos(√2 π t), c = 1.
-  const RunSetup setup = load_run(write_config("mode2d", R"(
+  const RunSetup setup = load_run(write_config("mode2d", R"yaml(
 problem: wave
 domain: {lower: [0, 0], upper: [1, 1], time: [0, 0.5]}
 equation: {speed: 1}
 conditions:
   - {on: boundary, type: dirichlet, value: "0"}
-)"), {});
+)yaml"), {});
   const auto terms = setup.problem->loss_terms();
   ASSERT_EQ(setup.problem->domain().input_dim(), 3);
   const double scale = 2 * kPi * kPi;
@@ -260,30 +260,30 @@ conditions:
 }
 
 TEST(Wave, ConfigErrors) {
-  EXPECT_THROW(load_run(write_config("no_time", R"(
+  EXPECT_THROW(load_run(write_config("no_time", R"yaml(
 problem: wave
 domain: {lower: [0], upper: [1]}
 equation: {speed: 1}
-)"), {}),
+)yaml"), {}),
                io::ConfigError);
-  EXPECT_THROW(load_run(write_config("bad_speed", R"(
+  EXPECT_THROW(load_run(write_config("bad_speed", R"yaml(
 problem: wave
 domain: {lower: [0], upper: [1], time: [0, 1]}
 equation: {speed: -1}
-)"), {}),
+)yaml"), {}),
                io::ConfigError);
-  EXPECT_THROW(load_run(write_config("unknown_key", R"(
+  EXPECT_THROW(load_run(write_config("unknown_key", R"yaml(
 problem: wave
 domain: {lower: [0], upper: [1], time: [0, 1]}
 equation: {speed: 1, sourse: "0"}
-)"), {}),
+)yaml"), {}),
                io::ConfigError);
 }
 
 // A tiny training run: the first standing mode u = sin(πx) cos(2πt), c = 2, over half a
 // period. Bound: rel_l2 < 5e-2 on a 64 × 9 grid.
 TEST(Wave, TinyTrainingLearnsStandingWave) {
-  RunSetup setup = load_run(write_config("tiny", R"(
+  RunSetup setup = load_run(write_config("tiny", R"yaml(
 problem: wave
 domain: {lower: [0], upper: [1], time: [0, 0.5]}
 equation:
@@ -301,7 +301,7 @@ training:
   stages:
     - {optimizer: adam, steps: 300, lr: 5.0e-3, schedule: cosine, lr_final: 1.0e-4}
     - {optimizer: lbfgs, steps: 100}
-)"), {});
+)yaml"), {});
   const auto started = std::chrono::steady_clock::now();
   fields::Field<float> field(setup.field);
   Trainer<float> trainer(*setup.problem, field, setup.training);

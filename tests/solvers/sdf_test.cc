@@ -1,0 +1,244 @@
+// SPDX-License-Identifier: MIT
+//
+// The signed-distance problem (solvers/sdf.cc): the residuals vanish on the exact distance of
+// a sphere, their backward passes are the adjoints of their evaluate (central differences),
+// normalization maps the cloud into the domain, and a short run on a sphere point cloud gives
+// a zero level set near the sphere, written as surface.vtp/surface.ply with its metrics.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <random>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "io/triangle_mesh.h"
+#include "io/vtk_polydata.h"
+#include "solvers/run.h"
+
+namespace nfield::solvers {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+std::filesystem::path test_dir() {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "nfield_sdf_test";
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+std::filesystem::path write_config(const std::string& name, const std::string& text) {
+  const std::filesystem::path path = test_dir() / (name + ".yaml");
+  std::ofstream(path) << text;
+  return path;
+}
+
+double uniform(std::mt19937_64& rng, double lo, double hi) {
+  return lo + (hi - lo) * static_cast<double>(rng() >> 11) * 0x1.0p-53;
+}
+
+// n points on the sphere |x − c| = r (Fibonacci lattice) with outward normals, as .xyz text.
+std::filesystem::path write_sphere_cloud(const std::string& name, int n, double r,
+                                         const Eigen::Vector3d& c = Eigen::Vector3d::Zero()) {
+  const std::filesystem::path path = test_dir() / (name + ".xyz");
+  std::ofstream out(path);
+  out.precision(17);
+  const double golden = kPi * (3 - std::sqrt(5.0));
+  for (int i = 0; i < n; ++i) {
+    const double z = 1 - 2 * (i + 0.5) / n, rho = std::sqrt(1 - z * z), phi = golden * i;
+    const Eigen::Vector3d normal(rho * std::cos(phi), rho * std::sin(phi), z);
+    const Eigen::Vector3d p = c + r * normal;
+    out << p(0) << ' ' << p(1) << ' ' << p(2) << ' ' << normal(0) << ' ' << normal(1) << ' ' << normal(2) << '\n';
+  }
+  return path;
+}
+
+// A latitude–longitude triangulation of the sphere |x| = r, outward winding.
+io::TriangleMesh sphere_mesh(double r, int rings = 48, int segments = 96) {
+  io::TriangleMesh mesh;
+  const int n = 2 + (rings - 1) * segments;
+  mesh.vertices.resize(n, 3);
+  mesh.vertices.row(0) << 0, 0, r;
+  mesh.vertices.row(n - 1) << 0, 0, -r;
+  for (int i = 1; i < rings; ++i)
+    for (int j = 0; j < segments; ++j) {
+      const double theta = kPi * i / rings, phi = 2 * kPi * j / segments;
+      mesh.vertices.row(1 + (i - 1) * segments + j) << r * std::sin(theta) * std::cos(phi),
+          r * std::sin(theta) * std::sin(phi), r * std::cos(theta);
+    }
+  std::vector<Eigen::Vector3i> tris;
+  auto at = [&](int i, int j) { return 1 + (i - 1) * segments + (j % segments); };
+  for (int j = 0; j < segments; ++j) {
+    tris.emplace_back(0, at(1, j), at(1, j + 1));
+    tris.emplace_back(n - 1, at(rings - 1, j + 1), at(rings - 1, j));
+  }
+  for (int i = 1; i + 1 < rings; ++i)
+    for (int j = 0; j < segments; ++j) {
+      tris.emplace_back(at(i, j), at(i + 1, j), at(i + 1, j + 1));
+      tris.emplace_back(at(i, j), at(i + 1, j + 1), at(i, j + 1));
+    }
+  mesh.triangles.resize(static_cast<Eigen::Index>(tris.size()), 3);
+  for (size_t k = 0; k < tris.size(); ++k) mesh.triangles.row(static_cast<Eigen::Index>(k)) = tris[k].transpose();
+  return mesh;
+}
+
+std::string sphere_config(const std::filesystem::path& cloud, const std::string& extra = "") {
+  return "problem: sdf\nequation:\n  points: " + cloud.string() + "\n  normalize: false\n" + extra +
+         "training: {batch: {surface: 64, interior: 64}}\n";
+}
+
+// Streams of u = |x| − r (value and gradient) at points x.
+autodiff::Streams<double> sphere_streams(const autodiff::StreamLayout& layout, const Eigen::MatrixXd& x, double r) {
+  autodiff::Streams<double> s;
+  s.resize(x.rows(), layout.count(), 1);
+  s.data.setZero();
+  for (Eigen::Index p = 0; p < x.rows(); ++p) {
+    const double norm = x.row(p).norm();
+    s.stream(0)(p, 0) = norm - r;
+    for (int a = 0; a < 3; ++a) s.stream(layout.tangent(a))(p, 0) = x(p, a) / norm;
+  }
+  return s;
+}
+
+TEST(Sdf, ResidualsVanishOnTheExactDistance) {
+  const RunSetup setup = load_run(write_config("exact", sphere_config(write_sphere_cloud("exact", 500, 0.5))), {});
+  const auto terms = setup.problem->loss_terms();
+  ASSERT_EQ(terms.size(), 2u);
+  EXPECT_EQ(terms[0].name, "surface");
+  EXPECT_EQ(terms[1].name, "interior");
+  Random rng(4);
+  const Eigen::MatrixXd on = terms[0].sample(rng, 100);
+  EXPECT_LT((on.rowwise().norm().array() - 0.5).abs().maxCoeff(), 1e-12);
+  const autodiff::StreamLayout layout(terms[0].spec);
+  Eigen::MatrixXd r;
+  terms[0].residual(on)->evaluate(0, layout, sphere_streams(layout, on, 0.5), r);
+  ASSERT_EQ(r.cols(), 5);
+  EXPECT_LT(r.cwiseAbs().maxCoeff(), 1e-9);
+  // Interior: eikonal part 0; off-surface part √w exp(−α|u|/2).
+  const Eigen::MatrixXd x = terms[1].sample(rng, 100);
+  terms[1].residual(x)->evaluate(0, layout, sphere_streams(layout, x, 0.5), r);
+  ASSERT_EQ(r.cols(), 2);
+  EXPECT_LT(r.col(0).cwiseAbs().maxCoeff(), 1e-12);
+  for (Eigen::Index p = 0; p < x.rows(); ++p)
+    EXPECT_NEAR(r(p, 1), 10 * std::exp(-50 * std::abs(x.row(p).norm() - 0.5)), 1e-12);
+  // A wrong normal: 1 − cos = 1 for a perpendicular gradient, times w_normal = 100.
+  autodiff::Streams<double> turned = sphere_streams(layout, on.topRows(1), 0.5);
+  const Eigen::Vector3d n = on.row(0).transpose() / 0.5;
+  const Eigen::Vector3d t = n.unitOrthogonal();
+  for (int a = 0; a < 3; ++a) turned.stream(layout.tangent(a))(0, 0) = t(a);
+  terms[0].residual(on.topRows(1))->evaluate(0, layout, turned, r);
+  EXPECT_NEAR(r.rightCols(4).leftCols(3).squaredNorm(), 100, 1e-9);
+}
+
+// backward() against central differences of evaluate() on random streams.
+void check_adjoint(const LossTerm& term, const Eigen::MatrixXd& x, Eigen::Index first, std::mt19937_64& rng) {
+  const autodiff::StreamLayout layout(term.spec);
+  const auto residual = term.residual(x);
+  const Eigen::Index count = x.rows() - first;
+  autodiff::Streams<double> out;
+  out.resize(count, layout.count(), 1);
+  for (Eigen::Index i = 0; i < out.data.rows(); ++i) out.data(i, 0) = uniform(rng, -1, 1);
+  Eigen::MatrixXd r_bar(count, residual->components());
+  for (Eigen::Index i = 0; i < r_bar.size(); ++i) r_bar.data()[i] = uniform(rng, -1, 1);
+  autodiff::Streams<double> adjoint;
+  adjoint.resize(count, layout.count(), 1);
+  adjoint.data.setZero();
+  residual->backward(first, layout, out, r_bar, adjoint);
+  auto pairing = [&](const autodiff::Streams<double>& s) {
+    Eigen::MatrixXd r;
+    residual->evaluate(first, layout, s, r);
+    return (r.array() * r_bar.array()).sum();
+  };
+  const double h = 1e-6;
+  double worst = 0;
+  for (Eigen::Index i = 0; i < out.data.rows(); ++i) {
+    autodiff::Streams<double> plus = out, minus = out;
+    plus.data(i, 0) += h;
+    minus.data(i, 0) -= h;
+    const double fd = (pairing(plus) - pairing(minus)) / (2 * h);
+    worst = std::max(worst, std::abs(fd - adjoint.data(i, 0)) / (1 + std::abs(fd)));
+  }
+  EXPECT_LT(worst, 1e-6) << term.name;
+}
+
+TEST(Sdf, ResidualAdjointsMatchFiniteDifferences) {
+  // A small α so that the off-surface part is not flat at random values of u.
+  const RunSetup setup = load_run(write_config("adjoint", sphere_config(write_sphere_cloud("adjoint", 300, 0.5),
+                                                                       "  off_surface_alpha: 3\n")), {});
+  const auto terms = setup.problem->loss_terms();
+  std::mt19937_64 rng(9);
+  Random sampler(2);
+  for (const LossTerm& term : terms) {
+    const Eigen::MatrixXd x = term.sample(sampler, 20);
+    check_adjoint(term, x, 0, rng);
+    check_adjoint(term, x, 7, rng);
+  }
+}
+
+TEST(Sdf, NormalizationAndConfigErrors) {
+  // A cloud far outside [−1, 1]³ is moved and scaled in with the margin.
+  const auto cloud = write_sphere_cloud("far", 200, 10, Eigen::Vector3d(100, -50, 3));
+  const RunSetup setup = load_run(write_config("far", "problem: sdf\nequation: {points: " + cloud.string() +
+                                                          ", margin: 0.2}\ntraining: {batch: {surface: 8, interior: 8}}\n"), {});
+  Random rng(1);
+  const Eigen::MatrixXd x = setup.problem->loss_terms()[0].sample(rng, 200);
+  EXPECT_NEAR(x.cwiseAbs().maxCoeff(), 0.8, 0.02);
+  EXPECT_LT(x.colwise().mean().norm(), 0.05);
+  EXPECT_THROW(load_run(write_config("outside", sphere_config(cloud)), {}), io::ConfigError);
+  EXPECT_THROW(load_run(write_config("missing", sphere_config(test_dir() / "none.xyz")), {}), io::ConfigError);
+  EXPECT_THROW(load_run(write_config("two_d", "problem: sdf\ndomain: {lower: [0, 0], upper: [1, 1]}\n"
+                                              "equation: {points: " + cloud.string() + "}\n"), {}),
+               io::ConfigError);
+}
+
+TEST(Sdf, SphereCloudGivesASphere) {
+  const std::filesystem::path out = test_dir() / "sphere_out";
+  std::filesystem::remove_all(out);
+  io::write_ply(test_dir() / "sphere_reference.ply", sphere_mesh(0.5));
+  write_sphere_cloud("sphere_train", 2000, 0.5);
+  RunSetup setup = load_run(write_config("sphere", R"(
+problem: sdf
+equation:
+  points: sphere_train.xyz
+  normalize: false
+  reference_mesh: sphere_reference.ply
+field: {type: siren, hidden: [32, 32], first_omega: 10, hidden_omega: 10}
+training:
+  seed: 3
+  threads: 2
+  batch: {surface: 256, interior: 256}
+  stages:
+    - {optimizer: adam, steps: 300, lr: 2.0e-3, schedule: cosine, lr_final: 1.0e-4}
+output: {grid: [40, 40, 40], png: false}
+)"), {}, out);
+  const auto started = std::chrono::steady_clock::now();
+  ASSERT_EQ(execute_run(setup), 0);
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  const io::PolyData surface = io::read_vtp(out / "surface.vtp");
+  ASSERT_GT(surface.triangles.rows(), 100);
+  const Eigen::ArrayXd radii = surface.points.rowwise().norm().array();
+  std::printf("sphere run: %.1f s, %ld triangles, radius mean %.4f, min %.4f, max %.4f\n", wall,
+              static_cast<long>(surface.triangles.rows()), radii.mean(), radii.minCoeff(), radii.maxCoeff());
+  EXPECT_NEAR(radii.mean(), 0.5, 0.02);
+  EXPECT_GT(radii.minCoeff(), 0.42);
+  EXPECT_LT(radii.maxCoeff(), 0.58);
+  const io::TriangleMesh ply = io::read_triangle_mesh(out / "surface.ply");
+  EXPECT_EQ(ply.triangles.rows(), surface.triangles.rows());
+  std::ifstream file(out / "metrics.json");
+  const nlohmann::json metrics = nlohmann::json::parse(file);
+  std::printf("chamfer_mean %.4f chamfer_max %.4f sign_accuracy %.4f\n", metrics["chamfer_mean"].get<double>(),
+              metrics["chamfer_max"].get<double>(), metrics["sign_accuracy"].get<double>());
+  EXPECT_LT(metrics["chamfer_mean"].get<double>(), 0.02);
+  EXPECT_LT(metrics["chamfer_max"].get<double>(), 0.08);
+  EXPECT_GT(metrics["sign_accuracy"].get<double>(), 0.98);
+  EXPECT_EQ(metrics["surface_triangles"].get<double>(), static_cast<double>(surface.triangles.rows()));
+  std::filesystem::remove_all(out);
+}
+
+}  // namespace
+}  // namespace nfield::solvers
