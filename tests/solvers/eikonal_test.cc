@@ -71,7 +71,8 @@ void check_adjoint(const Residual& residual, const autodiff::StreamLayout& layou
 
 void check_pde_adjoint(const std::string& config) {
   const RunSetup setup = load_run(write_config("adjoint", config), {});
-  const LossTerm& pde = setup.problem->loss_terms().at(0);
+  const std::vector<LossTerm> terms = setup.problem->loss_terms();
+  const LossTerm& pde = terms.at(0);
   ASSERT_EQ(pde.name, "pde");
   std::mt19937_64 rng(5);
   Random sampler(3);

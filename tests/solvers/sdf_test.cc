@@ -15,6 +15,7 @@
 #include <random>
 #include <string>
 
+#include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 
 #include "io/triangle_mesh.h"
