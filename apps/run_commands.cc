@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <memory>
 
+#include "io/hdf5_file.h"
 #include "solvers/run.h"
 
 namespace nfield::apps {
@@ -23,6 +24,18 @@ struct EvalArguments {
   std::string out;
 };
 
+// A file that is not a checkpoint is bad input (exit code 2), like a missing one.
+const CLI::Validator kCheckpointFile(
+    [](std::string& path) -> std::string {
+      try {
+        if (!io::H5Reader(path).has_group("field")) return path + ": not an nfield checkpoint (no group 'field')";
+      } catch (const io::H5Error& e) {
+        return e.what();
+      }
+      return {};
+    },
+    "CHECKPOINT");
+
 }  // namespace
 
 void add_run_commands(CLI::App& app) {
@@ -32,7 +45,8 @@ void add_run_commands(CLI::App& app) {
   run_command->add_option("--set", run->overrides, "Override a config value: key.path=value (repeatable)");
   run_command->add_option("--out", run->out, "Output folder (overrides output.dir)");
   run_command->add_option("--resume", run->resume, "Continue from a checkpoint written by an earlier run")
-      ->check(CLI::ExistingFile);
+      ->check(CLI::ExistingFile)
+      ->check(kCheckpointFile);
   run_command->callback([run] {
     solvers::RunSetup setup = solvers::load_run(run->config, run->overrides, run->out);
     const int code = solvers::execute_run(setup, run->resume);
@@ -52,7 +66,8 @@ void add_run_commands(CLI::App& app) {
   CLI::App* eval_command = app.add_subcommand("eval", "Sample a checkpoint's field onto a grid and write VTK");
   eval_command->add_option("checkpoint", eval->checkpoint, "A checkpoint.h5 from nfield run")
       ->required()
-      ->check(CLI::ExistingFile);
+      ->check(CLI::ExistingFile)
+      ->check(kCheckpointFile);
   eval_command->add_option("--grid", eval->grid, "Points per space axis")->check(CLI::Range(2, 4096))->capture_default_str();
   eval_command->add_option("--out", eval->out, "Output folder (default: beside the checkpoint, eval/)");
   eval_command->callback([eval] {

@@ -67,6 +67,18 @@ typename Sequential<Scalar>::Workspace& Sequential<Scalar>::workspace(int thread
 
 namespace {
 int thread_count(int requested) { return requested > 0 ? requested : omp_get_max_threads(); }
+
+// The blocks already split the work over the threads: each block's matrix products must
+// run on its own thread. Eigen would otherwise open a nested team of its own inside a team
+// of one thread (threads = 1), which costs 3–4× per step.
+class SingleThreadedEigen {
+ public:
+  SingleThreadedEigen() : previous_(Eigen::nbThreads()) { Eigen::setNbThreads(1); }
+  ~SingleThreadedEigen() { Eigen::setNbThreads(previous_); }
+
+ private:
+  int previous_;
+};
 }  // namespace
 
 template <typename Scalar>
@@ -78,6 +90,7 @@ void Sequential<Scalar>::evaluate(const Scalar* params, const StreamLayout& layo
   const Eigen::Index blocks = (n + block - 1) / block;
   const int threads = thread_count(options_.threads);
   out.resize(n, layout.count(), output_width());
+  const SingleThreadedEigen single_threaded_products;
   if (static_cast<int>(workspaces_.size()) < threads) workspaces_.resize(threads);
   for (auto& w : workspaces_)
     if (!w) w = std::make_unique<Workspace>();
@@ -107,6 +120,7 @@ double Sequential<Scalar>::value_and_gradient(const Scalar* params, const Stream
   const Eigen::Index blocks = (n + block - 1) / block;
   const int threads = thread_count(options_.threads);
   const size_t depth = modules_.size();
+  const SingleThreadedEigen single_threaded_products;
   if (static_cast<int>(workspaces_.size()) < threads) workspaces_.resize(threads);
   for (auto& w : workspaces_) {
     if (!w) w = std::make_unique<Workspace>();

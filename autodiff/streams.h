@@ -13,7 +13,8 @@
 //
 // With the coordinate axes as tangents, C = I gives the Laplacian, C = diag(−c², …, 1) the
 // wave operator over (x, …, t), C = e_x e_xᵀ a single ∂xx. Orders above two (Δ², u_xxx) come
-// from Taylor series; mixed partials by polarization (see `polarization.h`).
+// from Taylor series; mixed partials by polarization:
+// e.g. u_xxyy = (D⁴₍ₓ₊ᵧ₎ + D⁴₍ₓ₋ᵧ₎ − 2D⁴ₓ − 2D⁴ᵧ)/12 with D⁴_w = 4! a_{w,4}.
 //
 // Memory layout: all streams of a layer are stacked into one (S·N) × width column-major
 // matrix; stream s owns rows [s·N, (s+1)·N). A linear layer is then one matrix product over

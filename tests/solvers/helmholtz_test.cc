@@ -247,7 +247,7 @@ TEST(Helmholtz, GreenFunctionSolvesTheEquationOutsideTheLayer) {
   double scale = 0;  // k²|G| at its largest over the points
   for (Eigen::Index n = 0; n < x.rows(); ++n) scale = std::max(scale, kK * kK * std::abs(g.value(x.row(n).transpose())));
   const Eigen::MatrixXd r = residual_at(terms[0], g, x, 2);
-  EXPECT_LT(r.cwiseAbs().maxCoeff(), 0 * scale);
+  EXPECT_LT(r.cwiseAbs().maxCoeff(), 1e-9 * scale);
   // The same wave with k = 19 does not solve it.
   EXPECT_GT(residual_at(terms[0], green_2d(19), x, 2).cwiseAbs().maxCoeff(), 0.05 * scale);
   // The reference is G there, and error metrics skip the layer and the disk of radius 0.15.
@@ -341,7 +341,7 @@ TEST(Helmholtz, StretchedOperatorInTheLayerMatchesFiniteDifferences) {
     const double scale = kK * kK * std::abs(v.value(p)) + std::abs(expected);
     worst = std::max(worst, std::abs(Complex(r(n, 0), r(n, 1)) - expected) / scale);
   }
-  EXPECT_LT(worst, 0);
+  EXPECT_LT(worst, 1e-6);
   // And the layer matters: the unstretched residual Δv + k²v differs there.
   const RunSetup plain = load_run(write_config("no_layer", R"yaml(
 problem: helmholtz
@@ -401,7 +401,7 @@ training:
       const double f = -std::exp(0.5 * k * k * sigma * sigma) * std::pow(2 * kPi * sigma * sigma, -0.5 * d) *
                        std::exp(-p.squaredNorm() / (2 * sigma * sigma));
       const double f_peak = std::exp(0.5 * k * k * sigma * sigma) * std::pow(2 * kPi * sigma * sigma, -0.5 * d);
-      EXPECT_LT(std::abs(laplacian + k * k * exact(p) - f), 0 * f_peak) << "d = " << d << ", r = " << r;
+      EXPECT_LT(std::abs(laplacian + k * k * exact(p) - f), 2e-3 * f_peak) << "d = " << d << ", r = " << r;
     }
   }
 }

@@ -90,16 +90,6 @@ TEST(LoadRun, EmptyFaceListIsAConfigError) {
                       {7, 10, "conditions[0].on", "expected a face name"});
 }
 
-TEST(LoadRun, MisspelledBatchKeyIsAConfigError) {
-  expect_config_error(replaced("interior: 64", "interor: 64"),
-                      {12, 11, "training.batch", "unknown key 'interor'"});
-}
-
-TEST(LoadRun, UnusedDefaultBatchKeyIsAccepted) {
-  // `initial` is a batch of its own for time-dependent problems; listing it is no typo.
-  EXPECT_NO_THROW(load_run(write_config(replaced("boundary: 32}", "boundary: 32, initial: 8}")), {}));
-}
-
 TEST(LoadRun, ResolvedConfigReadsBackToItself) {
   const RunSetup first = load_run(write_config(kPoisson), {});
   const std::string text = io::to_yaml(first.resolved);
