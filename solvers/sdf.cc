@@ -193,8 +193,10 @@ Domain sdf_domain(const io::ConfigNode& root) {
   return domain;
 }
 
-// Signed distances to a closed mesh (negative inside), whatever the winding of its triangles.
-Eigen::VectorXd signed_mesh_distance(const Eigen::MatrixXd& points, const io::TriangleMesh& mesh) {
+// Signed distances to a closed mesh (negative inside), whatever the winding of its triangles,
+// for the points within `reach` of the mesh's bounding box; farther points get +inf (outside).
+Eigen::VectorXd signed_mesh_distance(const Eigen::MatrixXd& points, const io::TriangleMesh& mesh,
+                                     double reach) {
   vtkNew<vtkPoints> vertices;
   vertices->SetDataTypeToDouble();
   vertices->SetNumberOfPoints(mesh.vertices.rows());
@@ -208,18 +210,28 @@ Eigen::VectorXd signed_mesh_distance(const Eigen::MatrixXd& points, const io::Tr
   vtkNew<vtkPolyData> poly;
   poly->SetPoints(vertices);
   poly->SetPolys(cells);
-  vtkNew<vtkImplicitPolyDataDistance> distance;
-  distance->SetInput(poly);
-  // A point beyond the bounding box is outside: fix the sign convention with it.
-  const Eigen::Vector3d far = mesh.vertices.colwise().maxCoeff().transpose() +
-                              Eigen::Vector3d::Constant(1 + (mesh.vertices.colwise().maxCoeff() -
-                                                             mesh.vertices.colwise().minCoeff()).norm());
-  double probe[3] = {far(0), far(1), far(2)};
-  const double orientation = distance->EvaluateFunction(probe) < 0 ? -1.0 : 1.0;
-  Eigen::VectorXd out(points.rows());
-  for (Eigen::Index i = 0; i < points.rows(); ++i) {
-    double x[3] = {points(i, 0), points(i, 1), points(i, 2)};
-    out(i) = orientation * distance->EvaluateFunction(x);
+  const Eigen::RowVector3d lo = mesh.vertices.colwise().minCoeff().array() - reach;
+  const Eigen::RowVector3d hi = mesh.vertices.colwise().maxCoeff().array() + reach;
+  Eigen::VectorXd out = Eigen::VectorXd::Constant(points.rows(), std::numeric_limits<double>::infinity());
+  double orientation = 1;
+#pragma omp parallel
+  {
+    // One evaluator (and cell locator) per thread: EvaluateFunction is not thread-safe.
+    vtkNew<vtkImplicitPolyDataDistance> distance;
+#pragma omp critical
+    distance->SetInput(poly);
+#pragma omp single
+    {
+      // A point beyond the bounding box is outside: fix the sign convention with it.
+      double probe[3] = {hi(0) + 1 + (hi - lo).norm(), hi(1), hi(2)};
+      orientation = distance->EvaluateFunction(probe) < 0 ? -1.0 : 1.0;
+    }
+#pragma omp for schedule(dynamic, 4096)
+    for (Eigen::Index i = 0; i < points.rows(); ++i) {
+      if ((points.row(i).array() < lo.array()).any() || (points.row(i).array() > hi.array()).any()) continue;
+      double x[3] = {points(i, 0), points(i, 1), points(i, 2)};
+      out(i) = orientation * distance->EvaluateFunction(x);
+    }
   }
   return out;
 }
@@ -356,9 +368,9 @@ class Sdf final : public Problem {
       for (const char* key : {"chamfer_surface_to_mesh", "chamfer_mesh_to_surface", "chamfer_mean", "chamfer_max"})
         metrics.emplace_back(key, nan);
     }
-    const Eigen::VectorXd reference = signed_mesh_distance(to_original(x), *reference_);
     const double band = 0.05 * (reference_->vertices.colwise().maxCoeff() -
                                 reference_->vertices.colwise().minCoeff()).norm();
+    const Eigen::VectorXd reference = signed_mesh_distance(to_original(x), *reference_, band);
     Eigen::Index agree = 0, near = 0, near_agree = 0;
     for (Eigen::Index p = 0; p < n; ++p) {
       const bool same = (u(p) < 0) == (reference(p) < 0);
