@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "solvers/grid_output.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -25,7 +26,58 @@ Eigen::MatrixXd as_vtk_vector(const Eigen::MatrixXd& v) {
   return out;
 }
 
+// The evaluation points of frame k: the space grid, at the frame's time when there is one.
+Eigen::MatrixXd frame_points(const Domain& domain, const Eigen::MatrixXd& space, int k, int frames,
+                             double* t) {
+  Eigen::MatrixXd x(space.rows(), domain.input_dim());
+  x.leftCols(domain.space_dim()) = space;
+  *t = 0;
+  if (domain.has_time()) {
+    const auto [t0, t1] = domain.time();
+    *t = frames > 1 ? t0 + (t1 - t0) * k / (frames - 1) : t0;
+    x.col(domain.time_column()).setConstant(*t);
+  }
+  return x;
+}
+
+// Sums of |u − u*|² and |u*|² over the points the problem's error mask keeps.
+struct ErrorSums {
+  double error_sq = 0, exact_sq = 0, max_abs = 0;
+  void add(const Eigen::MatrixXd& error, const Eigen::MatrixXd& exact,
+           const Eigen::Array<bool, Eigen::Dynamic, 1>& mask) {
+    for (Eigen::Index i = 0; i < error.rows(); ++i)
+      if (mask(i)) {
+        error_sq += error.row(i).squaredNorm();
+        exact_sq += exact.row(i).squaredNorm();
+        max_abs = std::max(max_abs, error.row(i).cwiseAbs().maxCoeff());
+      }
+  }
+  double rel_l2() const { return exact_sq > 0 ? std::sqrt(error_sq / exact_sq) : std::sqrt(error_sq); }
+};
+
 }  // namespace
+
+GridMetrics grid_error(const Problem& problem, const StreamEvaluator& evaluate,
+                       const OutputOptions& output) {
+  GridMetrics metrics;
+  if (!problem.has_exact()) return metrics;
+  const Domain& domain = problem.domain();
+  const io::Grid grid = io::make_grid(domain.lower(), domain.upper(), output.grid);
+  const Eigen::MatrixXd space = grid.points(domain.space_dim());
+  const autodiff::StreamLayout layout(autodiff::StreamSpec::values(domain.input_dim()));
+  const int frames = domain.has_time() ? output.frames : 1;
+  ErrorSums sums;
+  for (int k = 0; k < frames; ++k) {
+    double t;
+    const Eigen::MatrixXd x = frame_points(domain, space, k, frames, &t);
+    const Eigen::MatrixXd exact = problem.exact(x);
+    sums.add(evaluate(layout, x).stream(0) - exact, exact, problem.error_mask(x));
+  }
+  metrics.has_error = true;
+  metrics.rel_l2 = sums.rel_l2();
+  metrics.max_abs_err = sums.max_abs;
+  return metrics;
+}
 
 GridMetrics write_grid_outputs(const Problem& problem, const StreamEvaluator& evaluate,
                                const OutputOptions& output) {
@@ -44,19 +96,14 @@ GridMetrics write_grid_outputs(const Problem& problem, const StreamEvaluator& ev
   const int residual_index = problem.residual_term();
 
   GridMetrics metrics;
-  double error_sq = 0, exact_sq = 0, residual_sq = 0;
+  ErrorSums sums;
+  double residual_sq = 0;
   Eigen::Index residual_count = 0;
   io::PvdCollection pvd(output.dir / "solution.pvd");
   Eigen::MatrixXd xt_image(frames, grid.dims[0]);  // 1D + time preview
   for (int k = 0; k < frames; ++k) {
-    Eigen::MatrixXd x(n, domain.input_dim());
-    x.leftCols(d) = space;
-    double t = 0;
-    if (domain.has_time()) {
-      const auto [t0, t1] = domain.time();
-      t = frames > 1 ? t0 + (t1 - t0) * k / (frames - 1) : t0;
-      x.col(domain.time_column()).setConstant(t);
-    }
+    double t;
+    const Eigen::MatrixXd x = frame_points(domain, space, k, frames, &t);
     io::PointArrays arrays;
     const autodiff::Streams<double> streams = evaluate(gradient_layout, x);
     const Eigen::MatrixXd u = streams.stream(0);
@@ -80,13 +127,7 @@ GridMetrics write_grid_outputs(const Problem& problem, const StreamEvaluator& ev
     if (problem.has_exact()) {
       const Eigen::MatrixXd exact = problem.exact(x);
       const Eigen::MatrixXd error = u - exact;
-      const auto mask = problem.error_mask(x);
-      for (Eigen::Index i = 0; i < n; ++i)
-        if (mask(i)) {
-          error_sq += error.row(i).squaredNorm();
-          exact_sq += exact.row(i).squaredNorm();
-          metrics.max_abs_err = std::max(metrics.max_abs_err, error.row(i).cwiseAbs().maxCoeff());
-        }
+      sums.add(error, exact, problem.error_mask(x));
       for (int c = 0; c < channels; ++c) {
         arrays["exact_" + names[c]] = exact.col(c);
         arrays["error_" + names[c]] = error.col(c);
@@ -116,7 +157,8 @@ GridMetrics write_grid_outputs(const Problem& problem, const StreamEvaluator& ev
   if (output.png && domain.has_time() && d == 1)
     io::write_scalar_png(output.dir / "solution.png", xt_image, {std::nullopt, io::Colormap::kViridis});
   if (metrics.has_error) {
-    metrics.rel_l2 = exact_sq > 0 ? std::sqrt(error_sq / exact_sq) : std::sqrt(error_sq);
+    metrics.rel_l2 = sums.rel_l2();
+    metrics.max_abs_err = sums.max_abs;
   }
   if (residual_count > 0) metrics.residual_rms = std::sqrt(residual_sq / residual_count);
   return metrics;

@@ -27,6 +27,11 @@ struct GridMetrics {
   double residual_rms = 0;
 };
 
+// rel_l2 and max_abs_err on the output grid (and frames) without writing anything; the
+// rest of the metrics stay zero. Used after each training stage.
+GridMetrics grid_error(const Problem& problem, const StreamEvaluator& evaluate,
+                       const OutputOptions& output);
+
 GridMetrics write_grid_outputs(const Problem& problem, const StreamEvaluator& evaluate,
                                const OutputOptions& output);
 

@@ -8,7 +8,9 @@
 #include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <cmath>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 
 #include "fields/field_config.h"
@@ -132,11 +134,14 @@ StreamEvaluator evaluator(const fields::Field<Scalar>& field) {
 
 template <typename Scalar>
 void write_checkpoint(const std::filesystem::path& path, const fields::Field<Scalar>& field,
-                      const Trainer<Scalar>& trainer, const std::string& config_text) {
+                      const Trainer<Scalar>& trainer, const std::string& config_text,
+                      const std::filesystem::path& config_dir) {
   io::H5Writer file(path);
   fields::save_field(file, field);
   trainer.save_state(file);
   file.write_attribute("/", "config", config_text);
+  // Relative data paths in the config (point clouds, images) resolve against this folder.
+  file.write_attribute("/", "config_dir", config_dir.string());
   file.write_attribute("/", "nfield_version", std::string(version()));
   file.commit();
 }
@@ -145,6 +150,8 @@ template <typename Scalar>
 int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
   const std::filesystem::path dir = setup.output.dir;
   const std::string config_text = io::to_yaml(setup.resolved);
+  const std::filesystem::path config_dir =
+      std::filesystem::absolute(setup.data_dir).lexically_normal();
   fields::Field<Scalar> field(setup.field);
   Trainer<Scalar> trainer(*setup.problem, field, setup.training);
   if (!resume.empty()) {
@@ -172,12 +179,17 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
     typename Trainer<Scalar>::Callbacks callbacks;
     callbacks.stop_requested = [] { return g_signal.load() != 0; };
     callbacks.progress = [&printer](const Progress& p) { printer(p); };
-    callbacks.checkpoint = [&] { write_checkpoint(dir / "checkpoint.h5", field, trainer, config_text); };
+    callbacks.stage_error = [&] {
+      return setup.problem->has_exact()
+                 ? grid_error(*setup.problem, evaluator(field), setup.output).rel_l2
+                 : std::numeric_limits<double>::quiet_NaN();
+    };
+    callbacks.checkpoint = [&] { write_checkpoint(dir / "checkpoint.h5", field, trainer, config_text, config_dir); };
     finished = trainer.run(callbacks);
   }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   if (!finished) std::printf("\ninterrupted at step %ld: writing the checkpoint and outputs\n", trainer.step());
-  write_checkpoint(dir / "checkpoint.h5", field, trainer, config_text);
+  write_checkpoint(dir / "checkpoint.h5", field, trainer, config_text, config_dir);
 
   const GridMetrics grid = write_grid_outputs(*setup.problem, evaluator(field), setup.output);
   std::vector<std::pair<std::string, double>> extra;
@@ -202,6 +214,19 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
   }
   metrics["loss"] = loss;
   metrics["stage_losses"] = trainer.stage_losses();
+  // Per finished stage: optimizer, final loss, rel_l2 on the output grid, wall seconds.
+  metrics["stages"] = nlohmann::ordered_json::array();
+  for (size_t k = 0; k < trainer.stage_losses().size(); ++k) {
+    nlohmann::ordered_json stage;
+    stage["optimizer"] = setup.training.stages[k].optimizer;
+    stage["steps"] = setup.training.stages[k].steps;
+    stage["loss"] = trainer.stage_losses()[k];
+    if (k < trainer.stage_errors().size() && std::isfinite(trainer.stage_errors()[k]))
+      stage["rel_l2"] = trainer.stage_errors()[k];
+    if (k < trainer.stage_seconds().size() && std::isfinite(trainer.stage_seconds()[k]))
+      stage["wall_s"] = trainer.stage_seconds()[k];
+    metrics["stages"].push_back(stage);
+  }
   if (grid.has_error) {
     metrics["rel_l2"] = grid.rel_l2;
     metrics["max_abs_err"] = grid.max_abs_err;
@@ -221,20 +246,33 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
 }  // namespace
 
 RunSetup load_run(const std::filesystem::path& config, const std::vector<std::string>& overrides,
-                  const std::filesystem::path& out_dir_override) {
-  RunSetup s{config, io::load_config(config, overrides)};
+                  const std::filesystem::path& out_dir_override,
+                  const std::filesystem::path& data_dir) {
+  RunSetup s{.config_path = config, .root = io::load_config(config, overrides)};
+  s.data_dir = data_dir.empty() ? config.parent_path() : data_dir;
   s.root.get_choice("problem", problem_names());
-  s.problem = make_problem({s.root, config.parent_path()});
+  s.problem = make_problem({s.root, s.data_dir});
   s.training = TrainingOptions::from_config(s.root.child_or_empty("training"));
   s.field = fields::field_options_from_config(s.root.child_or_empty("field"),
                                               s.problem->domain().input_dim(),
                                               s.problem->output_dim(), s.training.seed);
   s.output = output_options(s.root.child_or_empty("output"), s.problem->domain(), config,
                             out_dir_override);
-  for (const LossTerm& term : s.problem->loss_terms())
+  // The batch keys are the problem's loss-term kinds: a misspelled or unused one is an error,
+  // and the resolved config lists only those the problem draws.
+  std::vector<std::string> batch_keys;
+  for (const LossTerm& term : s.problem->loss_terms()) {
     if (!s.training.batch.count(term.batch_key))
       throw s.root.child_or_empty("training").error(
           "batch", "needs an entry '" + term.batch_key + "' for the loss term '" + term.name + "'");
+    if (std::find(batch_keys.begin(), batch_keys.end(), term.batch_key) == batch_keys.end())
+      batch_keys.push_back(term.batch_key);
+  }
+  if (s.root.child_or_empty("training").has("batch"))
+    s.root.child("training").child("batch").expect_keys(batch_keys);
+  std::erase_if(s.training.batch, [&](const auto& entry) {
+    return std::find(batch_keys.begin(), batch_keys.end(), entry.first) == batch_keys.end();
+  });
   s.root.child_or_empty("training").reject_unknown_keys();
   s.root.reject_unknown_keys_recursive();
   s.resolved = YAML::Clone(s.root.yaml());
@@ -256,7 +294,11 @@ void evaluate_checkpoint(const std::filesystem::path& checkpoint, int grid_point
   const std::filesystem::path config_copy = out_dir / "config.yaml";
   std::filesystem::create_directories(out_dir);
   io::write_atomically(config_copy, [&](const std::filesystem::path& p) { std::ofstream(p) << config_text; });
-  RunSetup setup = load_run(config_copy, {}, out_dir);
+  // Checkpoints written before config_dir existed: relative paths resolve in the cwd.
+  const std::filesystem::path data_dir = file.has_attribute("/", "config_dir")
+                                             ? std::filesystem::path(file.read_attribute<std::string>("/", "config_dir"))
+                                             : std::filesystem::current_path();
+  RunSetup setup = load_run(config_copy, {}, out_dir, data_dir);
   setup.output.grid.assign(setup.problem->domain().space_dim(), grid_points);
   const fields::Field<double> field = fields::load_field<double>(file);
   const GridMetrics grid = write_grid_outputs(*setup.problem, evaluator(field), setup.output);

@@ -44,11 +44,14 @@ struct RunSetup {
   TrainingOptions training;
   OutputOptions output;
   YAML::Node resolved;  // the config with defaults filled in
+  std::filesystem::path data_dir;  // relative data paths resolve here (the config's folder)
 };
 
-// Reads and checks a config (and `--set` overrides). Throws io::ConfigError.
+// Reads and checks a config (and `--set` overrides). Throws io::ConfigError. Relative data
+// paths resolve against `data_dir` (default: the config's folder).
 RunSetup load_run(const std::filesystem::path& config, const std::vector<std::string>& overrides,
-                  const std::filesystem::path& out_dir_override = {});
+                  const std::filesystem::path& out_dir_override = {},
+                  const std::filesystem::path& data_dir = {});
 
 // Trains and writes the outputs. Returns 0 when finished, 130 when interrupted by a signal
 // (outputs and checkpoint of the state reached are still written).

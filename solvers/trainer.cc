@@ -5,6 +5,7 @@
 #include <ceres/gradient_problem_solver.h>
 
 #include <chrono>
+#include <limits>
 #include <sstream>
 
 namespace nfield::solvers {
@@ -192,12 +193,16 @@ bool Trainer<Scalar>::run(const Callbacks& callbacks) {
   started_step_ = global_step_;
   for (; stage_ < static_cast<int>(options_.stages.size()); ++stage_) {
     const StageOptions& stage = options_.stages[stage_];
+    const double stage_started = now_seconds();
     const bool finished = stage.optimizer == "lbfgs" ? run_lbfgs(stage, callbacks)
                                                      : run_adam(stage, callbacks);
     if (!finished) return false;
     double total = 0;
     for (double l : losses_) total += l;
     stage_losses_.push_back(total);
+    stage_seconds_.push_back(now_seconds() - stage_started);
+    stage_errors_.push_back(callbacks.stage_error ? callbacks.stage_error()
+                                                  : std::numeric_limits<double>::quiet_NaN());
     stage_step_ = 0;
     adam_.reset();
   }
@@ -221,6 +226,7 @@ void Trainer<Scalar>::save_state(io::H5Writer& file) const {
   for (size_t k = 0; k < terms_.size(); ++k)
     if (points_[k].size() > 0) file.write("trainer/points/" + std::to_string(k), points_[k]);
   file.write("trainer/stage_losses", stage_losses_);
+  file.write("trainer/stage_errors", stage_errors_);
 }
 
 template <typename Scalar>
@@ -248,6 +254,13 @@ void Trainer<Scalar>::load_state(const io::H5Reader& file) {
     const Eigen::VectorXd s = file.read_vector<double>("trainer/stage_losses");
     stage_losses_.assign(s.data(), s.data() + s.size());
   }
+  if (file.has_dataset("trainer/stage_errors")) {
+    const Eigen::VectorXd e = file.read_vector<double>("trainer/stage_errors");
+    stage_errors_.assign(e.data(), e.data() + e.size());
+  }
+  // Wall times are not state (a resumed run must end bit-identical): unknown for stages run
+  // before the resume.
+  stage_seconds_.assign(stage_losses_.size(), std::numeric_limits<double>::quiet_NaN());
 }
 
 template class Trainer<float>;

@@ -48,6 +48,9 @@ class Trainer {
     std::function<bool()> stop_requested;           // polled every step
     std::function<void(const Progress&)> progress;  // after every step
     std::function<void()> checkpoint;               // every checkpoint_every steps
+    // After each stage: the error against the exact solution then (NaN: none), kept per
+    // stage in stage_errors() and in the checkpoint.
+    std::function<double()> stage_error;
   };
 
   Trainer(const Problem& problem, fields::Field<Scalar>& field, TrainingOptions options);
@@ -63,6 +66,9 @@ class Trainer {
   const std::vector<double>& step_milliseconds() const { return step_ms_; }
   // Final loss after each finished stage, in order.
   const std::vector<double>& stage_losses() const { return stage_losses_; }
+  const std::vector<double>& stage_errors() const { return stage_errors_; }
+  // Wall seconds of each finished stage (NaN for stages finished before a resume).
+  const std::vector<double>& stage_seconds() const { return stage_seconds_; }
 
   void save_state(io::H5Writer& file) const;
   void load_state(const io::H5Reader& file);
@@ -83,7 +89,7 @@ class Trainer {
   std::vector<Eigen::MatrixXd> points_;
   std::vector<autodiff::Matrix<Scalar>> points_scalar_;
   std::vector<std::unique_ptr<Residual>> residuals_;
-  std::vector<double> losses_, stage_losses_, step_ms_;
+  std::vector<double> losses_, stage_losses_, stage_errors_, stage_seconds_, step_ms_;
   std::unique_ptr<Adam<Scalar>> adam_;
   Random rng_;
   int stage_ = 0;

@@ -321,6 +321,41 @@ TEST_P(OutputsTest, SolutionAndMetricsMatchTheCheckpointField) {
   check_solution(out / "eval" / "solution.vti", out / "checkpoint.h5", 5, 5, tolerance);
 }
 
+// A config whose data file is named relative to the config's folder: run and eval both find
+// it whatever the working directory (eval reads the folder from the checkpoint, since the
+// config it re-reads is the copy in the output folder).
+TEST(EvalTest, RelativeDataPathsResolveAgainstTheOriginalConfigFolder) {
+  const auto dir = scratch_dir();
+  const auto project = dir / "project";
+  std::filesystem::create_directories(project / "data");
+  std::string cloud;
+  for (int k = 0; k < 64; ++k) {
+    const double a = 2 * kPi * k / 64;
+    char line[160];
+    std::snprintf(line, sizeof line, "%.17g %.17g 0 %.17g %.17g 0\n", 0.5 * std::cos(a),
+                  0.5 * std::sin(a), std::cos(a), std::sin(a));
+    cloud += line;
+  }
+  write_text(project / "data" / "ring.xyz", cloud);
+  write_text(project / "sdf.yaml",
+             "problem: sdf\n"
+             "equation: {points: data/ring.xyz, normalize: false}\n"
+             "field: {type: siren, hidden: [8, 8], first_omega: 3, hidden_omega: 1}\n"
+             "training: {threads: 1, batch: {surface: 16, interior: 16},\n"
+             "           stages: [{optimizer: adam, steps: 2}]}\n"
+             "output: {grid: [6, 6, 6], png: false}\n");
+  const auto elsewhere = dir / "elsewhere";
+  std::filesystem::create_directories(elsewhere);
+  const auto out = dir / "out";
+  Outcome o = run_nfield({"run", (project / "sdf.yaml").string(), "--out", out.string()}, elsewhere,
+                         dir / "capture");
+  ASSERT_EQ(o.code, 0) << describe(o);
+  o = run_nfield({"eval", (out / "checkpoint.h5").string(), "--grid", "5", "--out", (dir / "ev").string()},
+                 elsewhere, dir / "capture");
+  ASSERT_EQ(o.code, 0) << describe(o);
+  EXPECT_TRUE(std::filesystem::exists(dir / "ev" / "solution.vti"));
+}
+
 INSTANTIATE_TEST_SUITE_P(Precisions, OutputsTest, ::testing::Values("double", "float"));
 
 }  // namespace
