@@ -344,6 +344,43 @@ TEST(Causal, TrainerWeightsMatchTheLossesOfItsPoints) {
   EXPECT_EQ(trainer.extra_metrics().front().first, "causal_min_weight");
 }
 
+// L-BFGS runs in segments of `every` iterations when causal or adaptive is on: after each,
+// the extra set is refined and the causal weights recomputed at the parameters reached.
+TEST(Causal, LbfgsSegmentsUpdateWeightsAndExtraSet) {
+  const std::string text = with(with(kWave, "    - {optimizer: adam, steps: 20, lr: 3.0e-3, schedule: cosine, lr_final: 1.0e-4}\n",
+                                     "    - {optimizer: adam, steps: 4, lr: 3.0e-3}\n    - {optimizer: lbfgs, steps: LBFGS}\n"),
+                                "slices: 8}", "slices: 8, every: 5}");
+  auto train = [&](int lbfgs_steps, fields::Field<double>& field) {
+    RunSetup setup = load_run(write_config(with(text, "LBFGS", std::to_string(lbfgs_steps)),
+                                           "lbfgs" + std::to_string(lbfgs_steps)), {});
+    auto trainer = std::make_unique<Trainer<double>>(*setup.problem, field, setup.training);
+    EXPECT_TRUE(trainer->run({}));
+    return std::make_pair(std::move(setup), std::move(trainer));
+  };
+  RunSetup base = load_run(write_config(with(text, "LBFGS", "1"), "base"), {});
+  fields::Field<double> at10(base.field), at12(base.field);
+  auto [setup10, ten] = train(10, at10);
+  auto [setup12, twelve] = train(12, at12);
+  EXPECT_EQ(twelve->step(), 16);
+  // Refinements after L-BFGS iterations 5 and 10 (none in the 4 Adam steps).
+  ASSERT_EQ(twelve->adaptive_points().rows(), 20);
+  EXPECT_EQ(ten->adaptive_points().rows(), 10);
+  const Eigen::MatrixXd& x = twelve->points(0);
+  ASSERT_EQ(x.rows(), 256 + 20);
+  EXPECT_EQ(Eigen::MatrixXd(x.bottomRows(20)), twelve->adaptive_points());
+  EXPECT_EQ(Eigen::MatrixXd(x.topRows(256)), Eigen::MatrixXd(ten->points(0).topRows(256)));
+  // The run of 12 updated its weights after iteration 10, at the parameters the run of 10 ended with.
+  const LossTerm pde = setup12.problem->loss_terms()[0];
+  const autodiff::StreamLayout layout(pde.spec);
+  autodiff::Streams<double> out;
+  at10.evaluate(layout, x, out);
+  Eigen::MatrixXd r;
+  pde.residual(x)->evaluate(0, layout, out, r);
+  const CausalWeights want = causal_weights(x.col(1), r.rowwise().squaredNorm(), 0, 1, 8, 0.01);
+  EXPECT_EQ(twelve->causal_weights().weights, want.weights);
+  EXPECT_NE(twelve->causal_weights().weights, ten->causal_weights().weights);
+}
+
 // ---- checkpoint round trip ------------------------------------------------------------
 
 TEST(SamplingState, ResumedRunWithEverythingOnIsBitExact) {
