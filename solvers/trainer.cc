@@ -288,10 +288,15 @@ bool Trainer<Scalar>::run_lbfgs(const StageOptions& stage, const Callbacks& call
   options.callbacks.push_back(&callback);
   while (true) {
     options.max_num_iterations = std::min(segment, stage.steps - stage_step_);
+    const int segment_start = stage_step_;
     ceres::GradientProblemSolver::Summary summary;
     ceres::Solve(options, problem, theta.data(), &summary);
     field_.parameters() = theta.cast<Scalar>();
-    if (stopped || stage_step_ >= stage.steps || summary.termination_type != ceres::NO_CONVERGENCE)
+    // A segment that ends early (its line search found no decrease) ends the stage only when
+    // the objective cannot change (no segments) or it made no step at all: an update of the
+    // weights or points can give L-BFGS somewhere to go again.
+    const bool early = summary.termination_type != ceres::NO_CONVERGENCE;
+    if (stopped || stage_step_ >= stage.steps || (early && (segment >= stage.steps || stage_step_ == segment_start)))
       break;
     if (options_.adaptive.enabled) {
       refine();
