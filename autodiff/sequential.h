@@ -10,6 +10,10 @@
 // run is bit-for-bit repeatable for a given thread count.
 //
 // Not thread-safe: one call at a time per Sequential (it reuses its per-thread workspaces).
+//
+// The first Sequential of a process raises glibc's mmap and trim thresholds (mallopt) to
+// 32 and 128 MiB: Eigen allocates its product buffers per call, and with the defaults each
+// call page-faulted them anew (up to 2× per step).
 #pragma once
 
 #include <memory>

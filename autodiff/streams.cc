@@ -1,6 +1,9 @@
 // SPDX-License-Identifier: MIT
 #include "autodiff/streams.h"
 
+#include <cmath>
+#include <numbers>
+
 #include <sstream>
 #include <stdexcept>
 
@@ -121,5 +124,14 @@ template void seed_input_streams<float>(const StreamLayout&, const Eigen::Ref<co
                                         Streams<float>&);
 template void seed_input_streams<double>(const StreamLayout&,
                                          const Eigen::Ref<const Matrix<double>>&, Streams<double>&);
+
+Eigen::MatrixXd biharmonic_directions_2d() {
+  Eigen::MatrixXd w(2, 3);
+  for (int p = 0; p < 3; ++p) {
+    const double angle = p * std::numbers::pi / 3;
+    w.col(p) << std::cos(angle), std::sin(angle);
+  }
+  return w;
+}
 
 }  // namespace nfield::autodiff

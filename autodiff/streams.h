@@ -15,6 +15,10 @@
 // wave operator over (x, …, t), C = e_x e_xᵀ a single ∂xx. Orders above two (Δ², u_xxx) come
 // from Taylor series; mixed partials by polarization:
 // e.g. u_xxyy = (D⁴₍ₓ₊ᵧ₎ + D⁴₍ₓ₋ᵧ₎ − 2D⁴ₓ − 2D⁴ᵧ)/12 with D⁴_w = 4! a_{w,4}.
+// An isotropic operator needs fewer directions than polarization: in 2D the mean of D⁴ over
+// three directions 60° apart is (3/8)Δ² exactly (equally spaced angles integrate the
+// harmonics 2 and 4 of cos⁴ exactly), so Δ²u = (64/3) Σₚ a_{p,4} from 1 + 3·4 = 13 streams
+// instead of the 17 of the four axis and diagonal directions (biharmonic_directions_2d).
 //
 // Memory layout: all streams of a layer are stacked into one (S·N) × width column-major
 // matrix; stream s owns rows [s·N, (s+1)·N). A linear layer is then one matrix product over
@@ -89,6 +93,11 @@ class StreamLayout {
   int tangents_ = 0, operators_ = 0, taylor_dirs_ = 0, taylor_order_ = 0;
   std::vector<std::vector<OperatorTerm>> terms_;
 };
+
+// Unit directions at 0°, 60° and 120° (2 × 3): with Taylor order ≥ 4 along them,
+// Δ²u = kBiharmonic2dWeight · Σₚ a_{p,4} (see the top of this file).
+Eigen::MatrixXd biharmonic_directions_2d();
+inline constexpr double kBiharmonic2dWeight = 64.0 / 3.0;  // (8/9) · 4!
 
 // The streams of one quantity for a block of points.
 template <typename Scalar>

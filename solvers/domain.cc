@@ -85,9 +85,8 @@ Face Domain::face(const std::string& name) const {
 
 Eigen::MatrixXd Domain::sample_interior(Random& rng, Eigen::Index n) const {
   const Eigen::VectorXd lo = input_lower(), hi = input_upper();
-  Eigen::MatrixXd x(n, input_dim());
-  for (Eigen::Index r = 0; r < n; ++r)
-    for (int c = 0; c < input_dim(); ++c) x(r, c) = lo(c) + (hi(c) - lo(c)) * uniform01(rng);
+  Eigen::MatrixXd x = unit_points(rng, n, input_dim());
+  for (int c = 0; c < input_dim(); ++c) x.col(c) = lo(c) + (hi(c) - lo(c)) * x.col(c).array();
   return x;
 }
 
@@ -110,9 +109,22 @@ Eigen::MatrixXd Domain::sample_faces(const std::vector<Face>& faces, Random& rng
   std::vector<double> cumulative;
   double total = 0;
   for (const Face& f : faces) cumulative.push_back(total += face_measure(f));
-  Eigen::MatrixXd x = sample_interior(rng, n);
+  // Column input_dim picks the face. From the engine it is drawn after all the points,
+  // the order uniform runs have always used.
+  Eigen::MatrixXd x;
+  Eigen::VectorXd pick(n);
+  if (rng.sequence()) {
+    const Eigen::MatrixXd u = unit_points(rng, n, input_dim() + 1);
+    x = u.leftCols(input_dim());
+    pick = u.col(input_dim());
+  } else {
+    x = unit_points(rng, n, input_dim());
+    for (Eigen::Index r = 0; r < n; ++r) pick(r) = uniform01(rng);
+  }
+  const Eigen::VectorXd lo = input_lower(), hi = input_upper();
+  for (int c = 0; c < input_dim(); ++c) x.col(c) = lo(c) + (hi(c) - lo(c)) * x.col(c).array();
   for (Eigen::Index r = 0; r < n; ++r) {
-    const double u = uniform01(rng) * total;
+    const double u = pick(r) * total;
     size_t k = 0;
     while (k + 1 < faces.size() && u >= cumulative[k]) ++k;
     x(r, faces[k].axis) = faces[k].upper ? upper_[faces[k].axis] : lower_[faces[k].axis];
@@ -121,6 +133,15 @@ Eigen::MatrixXd Domain::sample_faces(const std::vector<Face>& faces, Random& rng
 }
 
 Eigen::MatrixXd Domain::sample_initial(Random& rng, Eigen::Index n) const {
+  if (rng.sequence() && has_time()) {
+    // Only the space coordinates vary on the slice: no sequence dimension spent on t.
+    Eigen::MatrixXd x(n, input_dim());
+    x.leftCols(space_dim()) = unit_points(rng, n, space_dim());
+    for (int c = 0; c < space_dim(); ++c)
+      x.col(c) = lower_[c] + (upper_[c] - lower_[c]) * x.col(c).array();
+    x.col(time_column()).setConstant(time_->first);
+    return x;
+  }
   Eigen::MatrixXd x = sample_interior(rng, n);
   if (has_time()) x.col(time_column()).setConstant(time_->first);
   return x;

@@ -6,24 +6,22 @@
 //
 // Faces are named x_min, x_max, y_min, … ; "boundary" means all space faces, "initial" the
 // slice t = t0. Sampling draws from the caller's random engine only, so a run's points are
-// reproducible from its seed (and its saved engine state on resume).
+// reproducible from its seed (and its saved engine state on resume). When the engine carries
+// a low-discrepancy sequence (solvers/sampler.h), the unit-cube points come from it: the
+// interior uses input_dim coordinates, the initial slice the space ones, a union of faces
+// one more coordinate to pick the face (so each face gets a share ∝ its measure).
 #pragma once
 
 #include <optional>
-#include <random>
 #include <string>
 #include <vector>
 
 #include <Eigen/Core>
 
 #include "io/config.h"
+#include "solvers/sampler.h"
 
 namespace nfield::solvers {
-
-using Random = std::mt19937_64;
-
-// Uniform in [0, 1), from the raw engine (independent of the library's distributions).
-inline double uniform01(Random& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
 
 struct Face {
   int axis = 0;        // space axis

@@ -51,6 +51,13 @@ double ResidualLoss<Scalar>::evaluate(Eigen::Index first, const StreamLayout& la
   adjoint_d.points = out.points;
   adjoint_d.count = out.count;
   adjoint_d.data.setZero(out.data.rows(), out.data.cols());
+  if (point_weights_) {
+    const auto a = point_weights_->segment(first, out.points).array();
+    const Eigen::MatrixXd r_bar = (2.0 * scale_) * (r.array().colwise() * a).matrix();
+    residual_.backward(first, layout, out_d, r_bar, adjoint_d);
+    adjoint.data += adjoint_d.data.template cast<Scalar>();
+    return scale_ * (r.rowwise().squaredNorm().array() * a).sum();
+  }
   const Eigen::MatrixXd r_bar = (2.0 * scale_) * r;
   residual_.backward(first, layout, out_d, r_bar, adjoint_d);
   adjoint.data += adjoint_d.data.template cast<Scalar>();

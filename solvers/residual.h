@@ -67,17 +67,23 @@ struct LossTerm {
 };
 
 // Adapts a residual on a point set to the autodiff StreamLoss: w/N Σ ‖r‖², r̄ = 2w r / N.
+// With per-point weights aₙ (one per point of the set; causal training weights time slices
+// this way) the loss is w/N Σ aₙ ‖r(xₙ)‖² and r̄ₙ = 2w aₙ rₙ / N: the aₙ are constants of
+// the pass, never differentiated.
 template <typename Scalar>
 class ResidualLoss final : public autodiff::StreamLoss<Scalar> {
  public:
-  ResidualLoss(const Residual& residual, double weight, Eigen::Index total_points)
-      : residual_(residual), scale_(weight / static_cast<double>(total_points)) {}
+  ResidualLoss(const Residual& residual, double weight, Eigen::Index total_points,
+               const Eigen::VectorXd* point_weights = nullptr)
+      : residual_(residual), scale_(weight / static_cast<double>(total_points)),
+        point_weights_(point_weights) {}
   double evaluate(Eigen::Index first, const StreamLayout& layout, const Streams<Scalar>& out,
                   Streams<Scalar>& adjoint) const override;
 
  private:
   const Residual& residual_;
   double scale_;
+  const Eigen::VectorXd* point_weights_;  // not owned; null: all 1
 };
 
 }  // namespace nfield::solvers

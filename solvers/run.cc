@@ -101,6 +101,11 @@ class ProgressPrinter {
       std::snprintf(buffer, sizeof buffer, " %s %.3e", p.term_names[k].c_str(), p.term_losses[k]);
       terms += buffer;
     }
+    for (const auto& [name, value] : p.extras) {
+      char buffer[96];
+      std::snprintf(buffer, sizeof buffer, " | %s %.3g", name.c_str(), value);
+      terms += buffer;
+    }
     std::printf("%sstep %ld/%ld [%s] loss %.3e |%s | %.1f steps/s, ETA %.0f s%s", tty_ ? "\r\033[K" : "",
                 p.step, p.total_steps, p.optimizer.c_str(), p.loss, terms.c_str(),
                 p.steps_per_second, p.eta_seconds, tty_ ? "" : "\n");
@@ -232,6 +237,7 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
     metrics["max_abs_err"] = grid.max_abs_err;
   }
   metrics["residual_rms"] = grid.residual_rms;
+  for (const auto& [key, value] : trainer.extra_metrics()) metrics[key] = value;
   for (const auto& [key, value] : extra) metrics[key] = value;
   metrics["nfield_version"] = std::string(version());
   io::write_atomically(dir / "metrics.json", [&](const std::filesystem::path& p) {
@@ -273,6 +279,8 @@ RunSetup load_run(const std::filesystem::path& config, const std::vector<std::st
   std::erase_if(s.training.batch, [&](const auto& entry) {
     return std::find(batch_keys.begin(), batch_keys.end(), entry.first) == batch_keys.end();
   });
+  check_against_problem(s.root.child_or_empty("training"), s.training.adaptive, s.training.balance,
+                        s.training.causal, *s.problem);
   s.root.child_or_empty("training").reject_unknown_keys();
   s.root.reject_unknown_keys_recursive();
   s.resolved = YAML::Clone(s.root.yaml());

@@ -30,6 +30,17 @@ Trainer<Scalar>::Trainer(const Problem& problem, fields::Field<Scalar>& field,
                                   "' for loss term '" + term.name + "'");
   }
   losses_.assign(terms_.size(), 0.0);
+  balance_.assign(terms_.size(), 1.0);
+  pde_ = problem_.residual_term();
+  if ((options_.adaptive.enabled || options_.causal.enabled || options_.balance.method != "fixed") &&
+      (pde_ < 0 || pde_ >= static_cast<int>(terms_.size())))
+    throw std::invalid_argument("training.adaptive, balance and causal need a PDE residual term");
+  if (options_.causal.enabled && !problem_.domain().has_time())
+    throw std::invalid_argument("training.causal needs a time axis (domain.time)");
+  if (options_.sampler != "uniform")
+    for (size_t k = 0; k < terms_.size(); ++k)
+      // Seeds apart from the engine's and from each other (UnitSequence mixes them further).
+      sequences_.emplace_back(options_.sampler, options_.seed * 0x100000001B3ull + 7919 * (k + 1));
   points_.resize(terms_.size());
   points_scalar_.resize(terms_.size());
   residuals_.resize(terms_.size());
@@ -42,10 +53,28 @@ Trainer<Scalar>::~Trainer() = default;
 template <typename Scalar>
 void Trainer<Scalar>::resample() {
   for (size_t k = 0; k < terms_.size(); ++k) {
-    points_[k] = terms_[k].sample(rng_, options_.batch.at(terms_[k].batch_key));
+    {
+      const AttachSequence attach(rng_, sequences_.empty() ? nullptr : &sequences_[k]);
+      points_[k] = terms_[k].sample(rng_, options_.batch.at(terms_[k].batch_key));
+    }
+    if (static_cast<int>(k) == pde_) previous_adaptive_rows_ = adaptive_points_.rows();
+    if (static_cast<int>(k) == pde_ && adaptive_points_.rows() > 0) {
+      Eigen::MatrixXd joined(points_[k].rows() + adaptive_points_.rows(), points_[k].cols());
+      joined << points_[k], adaptive_points_;
+      points_[k] = std::move(joined);
+    }
     points_scalar_[k] = points_[k].template cast<Scalar>();
     residuals_[k] = terms_[k].residual(points_[k]);
   }
+}
+
+template <typename Scalar>
+double Trainer<Scalar>::term_loss(size_t k, const Scalar* params, double weight, Scalar* gradient) {
+  const bool causal = options_.causal.enabled && static_cast<int>(k) == pde_ &&
+                      causal_.point_weights.size() == points_[k].rows();
+  const ResidualLoss<Scalar> loss(*residuals_[k], weight, points_[k].rows(),
+                                  causal ? &causal_.point_weights : nullptr);
+  return field_.network().value_and_gradient(params, layouts_[k], points_scalar_[k], loss, gradient);
 }
 
 template <typename Scalar>
@@ -53,12 +82,79 @@ double Trainer<Scalar>::loss_and_gradient(const Scalar* params, Scalar* gradient
   Eigen::Map<autodiff::Vector<Scalar>>(gradient, field_.parameter_count()).setZero();
   double total = 0;
   for (size_t k = 0; k < terms_.size(); ++k) {
-    const ResidualLoss<Scalar> loss(*residuals_[k], terms_[k].weight, points_[k].rows());
-    losses_[k] = field_.network().value_and_gradient(params, layouts_[k], points_scalar_[k], loss,
-                                                     gradient);
+    losses_[k] = term_loss(k, params, terms_[k].weight * balance_[k], gradient);
     total += losses_[k];
   }
   return total;
+}
+
+template <typename Scalar>
+void Trainer<Scalar>::balanced_gradient(Scalar* gradient) {
+  const Eigen::Index n = field_.parameter_count();
+  std::vector<autodiff::Vector<Scalar>> g(terms_.size());
+  for (size_t k = 0; k < terms_.size(); ++k) {
+    g[k] = autodiff::Vector<Scalar>::Zero(n);
+    losses_[k] = term_loss(k, field_.parameters().data(), terms_[k].weight, g[k].data());
+  }
+  const Eigen::VectorXd pde = g[pde_].template cast<double>();
+  const double alpha = options_.balance.alpha;
+  Eigen::Map<autodiff::Vector<Scalar>> sum(gradient, n);
+  sum.setZero();
+  for (size_t k = 0; k < terms_.size(); ++k) {
+    if (static_cast<int>(k) != pde_) {
+      const double target = grad_norm_target(pde, g[k].template cast<double>(), terms_[k].weight, balance_[k]);
+      balance_[k] = (1 - alpha) * balance_[k] + alpha * target;
+    }
+    sum += static_cast<Scalar>(balance_[k]) * g[k];
+    losses_[k] *= balance_[k];
+  }
+}
+
+template <typename Scalar>
+Eigen::VectorXd Trainer<Scalar>::squared_residuals(size_t k, const Eigen::MatrixXd& x,
+                                                   const Residual& residual) const {
+  autodiff::Streams<Scalar> out;
+  field_.evaluate(layouts_[k], x.cast<Scalar>(), out);
+  autodiff::Streams<double> out_d;
+  out_d.points = out.points;
+  out_d.count = out.count;
+  out_d.data = out.data.template cast<double>();
+  Eigen::MatrixXd r;
+  residual.evaluate(0, layouts_[k], out_d, r);
+  return r.rowwise().squaredNorm();
+}
+
+template <typename Scalar>
+void Trainer<Scalar>::refine() {
+  Eigen::MatrixXd candidates;
+  {
+    const AttachSequence attach(rng_, sequences_.empty() ? nullptr : &sequences_[pde_]);
+    candidates = terms_[pde_].sample(rng_, options_.adaptive.candidates);
+  }
+  const auto residual = terms_[pde_].residual(candidates);
+  const std::vector<Eigen::Index> best =
+      largest(squared_residuals(pde_, candidates, *residual), options_.adaptive.add);
+  append_capped(adaptive_points_, candidates(best, Eigen::all), options_.adaptive.max_points);
+}
+
+template <typename Scalar>
+void Trainer<Scalar>::update_causal() {
+  const Eigen::VectorXd r2 = squared_residuals(pde_, points_[pde_], *residuals_[pde_]);
+  const auto [t0, t1] = problem_.domain().time();
+  causal_ = solvers::causal_weights(points_[pde_].col(problem_.domain().time_column()), r2, t0, t1,
+                                    options_.causal.slices, options_.causal.epsilon);
+}
+
+template <typename Scalar>
+std::vector<std::pair<std::string, double>> Trainer<Scalar>::extra_metrics() const {
+  std::vector<std::pair<std::string, double>> out;
+  if (options_.causal.enabled && !causal_.weights.empty())
+    out.emplace_back("causal_min_weight", causal_.min_weight());
+  if (options_.balance.method != "fixed")
+    for (size_t k = 0; k < terms_.size(); ++k) out.emplace_back("balance_weight_" + names_[k], balance_[k]);
+  if (options_.adaptive.enabled)
+    out.emplace_back("adaptive_points", static_cast<double>(adaptive_points_.rows()));
+  return out;
 }
 
 template <typename Scalar>
@@ -73,6 +169,8 @@ void Trainer<Scalar>::report(const Callbacks& callbacks, const StageOptions& sta
   p.term_names = names_;
   p.term_losses = losses_;
   for (double l : losses_) p.loss += l;
+  if (options_.causal.enabled && !causal_.weights.empty())
+    p.extras.emplace_back("causal min w", causal_.min_weight());
   const double elapsed = now_seconds() - started_;
   const long done = global_step_ - started_step_;
   p.steps_per_second = elapsed > 0 ? done / elapsed : 0;
@@ -87,8 +185,15 @@ bool Trainer<Scalar>::run_adam(const StageOptions& stage, const Callbacks& callb
   for (; stage_step_ < stage.steps; ++stage_step_) {
     if (callbacks.stop_requested && callbacks.stop_requested()) return false;
     const double start = now_seconds();
-    if (global_step_ % options_.resample_every == 0 || !residuals_[0]) resample();
-    loss_and_gradient(field_.parameters().data(), gradient.data());
+    const bool refine_now = options_.adaptive.enabled && global_step_ > 0 &&
+                            global_step_ % options_.adaptive.every == 0;
+    if (refine_now) refine();
+    if (refine_now || global_step_ % options_.resample_every == 0 || !residuals_[0]) resample();
+    if (options_.causal.enabled) update_causal();
+    if (options_.balance.method == "grad_norm" && global_step_ % options_.balance.every == 0)
+      balanced_gradient(gradient.data());
+    else
+      loss_and_gradient(field_.parameters().data(), gradient.data());
     const double lr = stage.learning_rate(stage_step_);
     adam_->step(field_.parameters().data(), gradient.data(), lr);
     step_ms_.push_back(1e3 * (now_seconds() - start));
@@ -144,6 +249,13 @@ template <typename Scalar>
 bool Trainer<Scalar>::run_lbfgs(const StageOptions& stage, const Callbacks& callbacks) {
   if (stage_step_ >= stage.steps) return true;
   resample();
+  // λ stays as it is for the whole stage, and causal weights and the RAR set for a segment
+  // of `every` iterations: a line search needs one objective. Each segment restarts Ceres
+  // (and so the L-BFGS history) on the updated objective.
+  int segment = stage.steps;
+  if (options_.causal.enabled) segment = std::min(segment, options_.causal.every);
+  if (options_.adaptive.enabled) segment = std::min(segment, options_.adaptive.every);
+  if (options_.causal.enabled) update_causal();
   Eigen::VectorXd theta = field_.parameters().template cast<double>();
   auto* function = new LossFunction<Scalar>(
       static_cast<int>(field_.parameter_count()),
@@ -152,7 +264,6 @@ bool Trainer<Scalar>::run_lbfgs(const StageOptions& stage, const Callbacks& call
   ceres::GradientProblemSolver::Options options;
   options.line_search_direction_type = ceres::LBFGS;
   options.max_lbfgs_rank = stage.memory;
-  options.max_num_iterations = stage.steps - stage_step_;
   options.function_tolerance = 0;
   options.gradient_tolerance = 0;
   options.parameter_tolerance = 0;
@@ -176,9 +287,31 @@ bool Trainer<Scalar>::run_lbfgs(const StageOptions& stage, const Callbacks& call
     return !stopped;
   });
   options.callbacks.push_back(&callback);
-  ceres::GradientProblemSolver::Summary summary;
-  ceres::Solve(options, problem, theta.data(), &summary);
-  field_.parameters() = theta.cast<Scalar>();
+  while (true) {
+    options.max_num_iterations = std::min(segment, stage.steps - stage_step_);
+    const int segment_start = stage_step_;
+    ceres::GradientProblemSolver::Summary summary;
+    ceres::Solve(options, problem, theta.data(), &summary);
+    field_.parameters() = theta.cast<Scalar>();
+    // A segment that ends early (its line search found no decrease) ends the stage only when
+    // the objective cannot change (no segments) or it made no step at all: an update of the
+    // weights or points can give L-BFGS somewhere to go again.
+    const bool early = summary.termination_type != ceres::NO_CONVERGENCE;
+    if (stopped || stage_step_ >= stage.steps || (early && (segment >= stage.steps || stage_step_ == segment_start)))
+      break;
+    if (options_.adaptive.enabled) {
+      refine();
+      // The stage's own points stay; only the extra set behind them changes.
+      const Eigen::Index own = points_[pde_].rows() - previous_adaptive_rows_;
+      Eigen::MatrixXd joined(own + adaptive_points_.rows(), points_[pde_].cols());
+      joined << points_[pde_].topRows(own), adaptive_points_;
+      points_[pde_] = std::move(joined);
+      points_scalar_[pde_] = points_[pde_].template cast<Scalar>();
+      residuals_[pde_] = terms_[pde_].residual(points_[pde_]);
+      previous_adaptive_rows_ = adaptive_points_.rows();
+    }
+    if (options_.causal.enabled) update_causal();
+  }
   // Converged early (no further decrease possible): the stage is done.
   if (!stopped) {
     global_step_ += stage.steps - stage_step_;
@@ -227,6 +360,11 @@ void Trainer<Scalar>::save_state(io::H5Writer& file) const {
     if (points_[k].size() > 0) file.write("trainer/points/" + std::to_string(k), points_[k]);
   file.write("trainer/stage_losses", stage_losses_);
   file.write("trainer/stage_errors", stage_errors_);
+  for (size_t k = 0; k < sequences_.size(); ++k)
+    file.write_attribute("trainer", "sequence_" + std::to_string(k), sequences_[k].state());
+  if (adaptive_points_.rows() > 0) file.write("trainer/adaptive_points", adaptive_points_);
+  file.write("trainer/balance_weights", balance_);
+  if (!causal_.weights.empty()) file.write("trainer/causal_weights", causal_.weights);
 }
 
 template <typename Scalar>
@@ -261,6 +399,22 @@ void Trainer<Scalar>::load_state(const io::H5Reader& file) {
   // Wall times are not state (a resumed run must end bit-identical): unknown for stages run
   // before the resume.
   stage_seconds_.assign(stage_losses_.size(), std::numeric_limits<double>::quiet_NaN());
+  for (size_t k = 0; k < sequences_.size(); ++k) {
+    const std::string name = "sequence_" + std::to_string(k);
+    if (file.has_attribute("trainer", name))
+      sequences_[k].set_state(file.read_attribute<std::string>("trainer", name));
+  }
+  adaptive_points_.resize(0, 0);
+  if (file.has_dataset("trainer/adaptive_points"))
+    adaptive_points_ = file.read_matrix<double>("trainer/adaptive_points");
+  if (file.has_dataset("trainer/balance_weights")) {
+    const Eigen::VectorXd b = file.read_vector<double>("trainer/balance_weights");
+    if (b.size() == static_cast<Eigen::Index>(balance_.size())) balance_.assign(b.data(), b.data() + b.size());
+  }
+  if (file.has_dataset("trainer/causal_weights")) {
+    const Eigen::VectorXd c = file.read_vector<double>("trainer/causal_weights");
+    causal_.weights.assign(c.data(), c.data() + c.size());
+  }
 }
 
 template class Trainer<float>;

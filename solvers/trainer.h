@@ -13,6 +13,13 @@
 // save_state and restored by load_state, so an interrupted Adam run resumed from its
 // checkpoint ends with the same parameters, bit for bit, as one never interrupted.
 // (An L-BFGS stage restarts its history when resumed.)
+//
+// training.sampler, adaptive, balance and causal (solvers/sampler.h, loss_balancing.h) hook
+// in here: each term draws through its own quasi-random sequence; every adaptive.every Adam
+// steps the PDE term's extra set is refined and the points redrawn; each Adam step first
+// computes the causal slice weights at the current parameters; every balance.every Adam steps
+// the terms' gradients are taken one by one to update λ. Their state (sequence counts, extra
+// set, λ) is part of save_state, so resumed runs still match uninterrupted ones.
 #pragma once
 
 #include <functional>
@@ -23,6 +30,7 @@
 #include "fields/field.h"
 #include "io/hdf5_file.h"
 #include "solvers/adam.h"
+#include "solvers/loss_balancing.h"
 #include "solvers/problem.h"
 #include "solvers/training_options.h"
 
@@ -39,6 +47,7 @@ struct Progress {
   std::vector<double> term_losses;
   double steps_per_second = 0;
   double eta_seconds = 0;
+  std::vector<std::pair<std::string, double>> extras;  // e.g. the minimum causal weight
 };
 
 template <typename Scalar>
@@ -70,12 +79,24 @@ class Trainer {
   // Wall seconds of each finished stage (NaN for stages finished before a resume).
   const std::vector<double>& stage_seconds() const { return stage_seconds_; }
 
+  // Sampling and balancing state, for metrics.json and tests.
+  std::vector<std::pair<std::string, double>> extra_metrics() const;
+  const Eigen::MatrixXd& points(size_t term) const { return points_[term]; }
+  const Eigen::MatrixXd& adaptive_points() const { return adaptive_points_; }
+  const std::vector<double>& balance_weights() const { return balance_; }
+  const CausalWeights& causal_weights() const { return causal_; }
+
   void save_state(io::H5Writer& file) const;
   void load_state(const io::H5Reader& file);
 
  private:
   void resample();
   double loss_and_gradient(const Scalar* params, Scalar* gradient);
+  double term_loss(size_t k, const Scalar* params, double weight, Scalar* gradient);
+  Eigen::VectorXd squared_residuals(size_t k, const Eigen::MatrixXd& x, const Residual& r) const;
+  void refine();
+  void update_causal();
+  void balanced_gradient(Scalar* gradient);
   bool run_adam(const StageOptions& stage, const Callbacks& callbacks);
   bool run_lbfgs(const StageOptions& stage, const Callbacks& callbacks);
   void report(const Callbacks& callbacks, const StageOptions& stage, double lr);
@@ -97,6 +118,12 @@ class Trainer {
   long global_step_ = 0;
   double started_ = 0;
   long started_step_ = 0;
+  int pde_ = -1;                          // the problem's residual term
+  std::vector<UnitSequence> sequences_;   // one per term (none for uniform sampling)
+  Eigen::MatrixXd adaptive_points_;       // RAR extra set, appended to the PDE batch
+  Eigen::Index previous_adaptive_rows_ = 0;  // rows of it behind the current PDE points
+  std::vector<double> balance_;           // λ per term (1 unless grad_norm)
+  CausalWeights causal_;
 };
 
 }  // namespace nfield::solvers

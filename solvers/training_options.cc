@@ -4,6 +4,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "solvers/sampler.h"
+
 namespace nfield::solvers {
 namespace {
 template <typename T>
@@ -40,6 +42,10 @@ TrainingOptions TrainingOptions::from_config(const io::ConfigNode& node) {
   o.resample_every = in_range_or(node, "resample_every", 1, 1 << 30, 1);
   o.log_every = in_range_or(node, "log_every", 1, 1 << 30, 100);
   o.checkpoint_every = in_range_or(node, "checkpoint_every", 0, 1 << 30, 0);
+  o.sampler = node.get_choice("sampler", sampler_names(), "uniform");
+  o.adaptive = adaptive_from_config(node);
+  o.balance = balance_from_config(node);
+  o.causal = causal_from_config(node);
   if (node.has("stages")) {
     const io::ConfigNode stages = node.child("stages");
     stages.require(stages.is_sequence() && stages.size() > 0, "expected a non-empty list of stages");
@@ -88,6 +94,8 @@ YAML::Node TrainingOptions::to_yaml() const {
     }
     n["stages"].push_back(y);
   }
+  n["sampler"] = sampler;
+  write_yaml(n, adaptive, balance, causal);
   return n;
 }
 

@@ -11,6 +11,10 @@
 //     resample_every: 1            # new points every k Adam steps (L-BFGS keeps its points)
 //     log_every: 100               # progress lines when the output is not a terminal
 //     checkpoint_every: 0          # steps between checkpoints (0: at the end and on Ctrl-C)
+//     sampler: uniform             # uniform | sobol | halton: interior, face and initial points
+//     adaptive: {every: 500, candidates: 10000, add: 100, max_points: 2000}  # RAR; absent: off
+//     balance: fixed               # fixed | grad_norm | {method: grad_norm, every: 100, alpha: 0.1}
+//     causal: {epsilon: 1.0, slices: 32, every: 100}   # causal weights in time; absent: off
 //     stages:
 //       - {optimizer: adam, steps: 2000, lr: 1.0e-3, schedule: cosine, lr_final: 1.0e-5}
 //       - {optimizer: lbfgs, steps: 500}
@@ -22,6 +26,7 @@
 #include <vector>
 
 #include "io/config.h"
+#include "solvers/loss_balancing.h"
 
 namespace nfield::solvers {
 
@@ -47,6 +52,11 @@ struct TrainingOptions {
   int log_every = 100;
   int checkpoint_every = 0;
   std::vector<StageOptions> stages{StageOptions{}};
+  // Sampling and loss balancing: see solvers/sampler.h and solvers/loss_balancing.h.
+  std::string sampler = "uniform";
+  AdaptiveOptions adaptive;
+  BalanceOptions balance;
+  CausalOptions causal;
 
   int total_steps() const;
   static TrainingOptions from_config(const io::ConfigNode& node);

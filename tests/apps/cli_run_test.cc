@@ -356,6 +356,39 @@ TEST(EvalTest, RelativeDataPathsResolveAgainstTheOriginalConfigFolder) {
   EXPECT_TRUE(std::filesystem::exists(dir / "ev" / "solution.vti"));
 }
 
+// nfield bench --accuracy on a folder holding one tiny case: the table's JSON line carries
+// the final error and the error after the Adam stage, both as metrics.json has them.
+TEST(AccuracyBenchTest, ReportsTheErrorAfterEachStage) {
+  const auto dir = scratch_dir();
+  std::filesystem::create_directories(dir / "configs");
+  write_text(dir / "configs" / "accuracy_poisson_2d.yaml",
+             poisson_config("{lower: [0, 0], upper: [1, 1]}",
+                            "  precision: double\n  threads: 1\n  batch: {interior: 64, boundary: 32}\n"
+                            "  stages:\n    - {optimizer: adam, steps: 20, lr: 1.0e-2}\n"
+                            "    - {optimizer: lbfgs, steps: 20}\n",
+                            "{grid: [9, 9], png: false}"));
+  Outcome o = run_nfield({"bench", "--accuracy", "--cases", "poisson_2d", "--configs",
+                          (dir / "configs").string(), "--out", (dir / "out").string()},
+                         dir, dir / "capture");
+  ASSERT_EQ(o.code, 0) << describe(o);
+  const nlohmann::json metrics = read_json(dir / "out" / "poisson_2d" / "metrics.json");
+  ASSERT_EQ(metrics["stages"].size(), 2u);
+  const std::string last = o.out.substr(o.out.rfind("{\"case\""));
+  const nlohmann::json row = nlohmann::json::parse(last);
+  EXPECT_EQ(row["case"], "poisson_2d");
+  EXPECT_EQ(row["rel_l2"].get<double>(), metrics["rel_l2"].get<double>());
+  EXPECT_EQ(row["rel_l2_after_adam"].get<double>(), metrics["stages"][0]["rel_l2"].get<double>());
+  EXPECT_EQ(row["wall_s"].get<double>(), metrics["wall_s"].get<double>());
+  // The last stage's error is the run's final error (same grid).
+  EXPECT_EQ(metrics["stages"][1]["rel_l2"].get<double>(), metrics["rel_l2"].get<double>());
+  EXPECT_LT(row["rel_l2"].get<double>(), row["rel_l2_after_adam"].get<double>());
+
+  o = run_nfield({"bench", "--accuracy", "--cases", "poison_2d", "--configs", (dir / "configs").string()},
+                 dir, dir / "capture");
+  EXPECT_EQ(o.code, 2) << describe(o);
+  EXPECT_NE(o.err.find("unknown case 'poison_2d' (valid: poisson_2d,"), std::string::npos) << o.err;
+}
+
 INSTANTIATE_TEST_SUITE_P(Precisions, OutputsTest, ::testing::Values("double", "float"));
 
 }  // namespace

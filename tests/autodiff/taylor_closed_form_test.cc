@@ -284,6 +284,19 @@ TEST(TaylorClosedForm, MixedPartialsByPolarization) {
     }
     expect_close(biharmonic, biharmonic_exact, "biharmonic by polarization", where,
                  biharmonic_scale);
+    if (d == 2) {
+      // Three directions 60° apart carry Δ² exactly: 13 streams instead of 17.
+      StreamSpec spec3 = StreamSpec::values(2);
+      spec3.set_taylor(autodiff::biharmonic_directions_2d(), 4);
+      const StreamLayout layout3(spec3);
+      Streams<double> out3;
+      field.evaluate(layout3, x, out3);
+      Eigen::MatrixXd from_three = Eigen::MatrixXd::Zero(x.rows(), 1);
+      for (int p = 0; p < 3; ++p) from_three += autodiff::kBiharmonic2dWeight * out3.stream(layout3.taylor(p, 4));
+      EXPECT_EQ(layout3.count(), 13);
+      expect_close(from_three, biharmonic_exact, "biharmonic from three directions", where,
+                   biharmonic_scale);
+    }
   }
 }
 
