@@ -6,6 +6,7 @@
 // and can evaluate at any point without copies.
 #pragma once
 
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -38,6 +39,24 @@ class Module {
                         const Streams<Scalar>& in, const SavedTensors<Scalar>& saved,
                         Streams<Scalar>& out_adjoint, Scalar* gradient,
                         Streams<Scalar>* in_adjoint) const = 0;
+
+  // backward for per-point Jacobians (Sequential::residuals_and_jacobian): instead of adding
+  // the parameter gradient summed over points, ASSIGNS point n's own term of that sum to row
+  // n of `jacobian` (in.points × parameter_count(); this module's columns, in the order of
+  // its parameter slice). With `out_adjoint` seeded per point (the rows of point n holding
+  // ∂r(xₙ)/∂out), row n is then ∂r(xₙ)/∂θ. The input adjoint is the same as backward's.
+  // Modules without parameters need not override it; those with parameters that do, say
+  // so in has_per_point_gradients.
+  virtual bool has_per_point_gradients() const { return parameter_count() == 0; }
+  virtual void backward_per_point(const StreamLayout& layout, const Scalar* params,
+                                  const Streams<Scalar>& in, const SavedTensors<Scalar>& saved,
+                                  Streams<Scalar>& out_adjoint, Eigen::Ref<Matrix<Scalar>> jacobian,
+                                  Streams<Scalar>* in_adjoint) const {
+    if (parameter_count() > 0)
+      throw std::logic_error("module '" + name() + "' has no per-point parameter gradients");
+    (void)jacobian;
+    backward(layout, params, in, saved, out_adjoint, nullptr, in_adjoint);
+  }
 };
 
 }  // namespace nfield::autodiff

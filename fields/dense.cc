@@ -34,6 +34,27 @@ void Dense<Scalar>::backward(const autodiff::StreamLayout&, const Scalar* params
   }
 }
 
+template <typename Scalar>
+void Dense<Scalar>::backward_per_point(const autodiff::StreamLayout&, const Scalar* params,
+                                       const autodiff::Streams<Scalar>& in,
+                                       const autodiff::SavedTensors<Scalar>&,
+                                       autodiff::Streams<Scalar>& out_adjoint,
+                                       Eigen::Ref<Matrix<Scalar>> jacobian,
+                                       autodiff::Streams<Scalar>* in_adjoint) const {
+  for (Eigen::Index j = 0; j < in_; ++j) {
+    auto w_j = jacobian.middleCols(j * out_, out_).array();
+    w_j = out_adjoint.stream(0).array().colwise() * in.stream(0).col(j).array();
+    for (int s = 1; s < in.count; ++s)
+      w_j += out_adjoint.stream(s).array().colwise() * in.stream(s).col(j).array();
+  }
+  jacobian.rightCols(out_) = out_adjoint.stream(0);
+  if (in_adjoint) {
+    const Eigen::Map<const Matrix<Scalar>> weight(params, out_, in_);
+    in_adjoint->resize(in.points, in.count, in_);
+    in_adjoint->data.noalias() = out_adjoint.data * weight;
+  }
+}
+
 template class Dense<float>;
 template class Dense<double>;
 
