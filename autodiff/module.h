@@ -18,6 +18,13 @@ namespace nfield::autodiff {
 template <typename Scalar>
 using SavedTensors = std::vector<Matrix<Scalar>>;
 
+// Rows of a row-major Jacobian (points × parameters) with any row stride: the destination
+// of Module::backward_per_point, a view into Sequential::residuals_and_jacobian's output.
+template <typename Scalar>
+using JacobianRows =
+    Eigen::Map<Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>, 0,
+               Eigen::OuterStride<>>;
+
 template <typename Scalar>
 class Module {
  public:
@@ -42,15 +49,15 @@ class Module {
 
   // backward for per-point Jacobians (Sequential::residuals_and_jacobian): instead of adding
   // the parameter gradient summed over points, ASSIGNS point n's own term of that sum to row
-  // n of `jacobian` (in.points × parameter_count(); this module's columns, in the order of
-  // its parameter slice). With `out_adjoint` seeded per point (the rows of point n holding
+  // n of `jacobian` (in.points × parameter_count(), row-major: this module's columns of the
+  // output rows, in the order of its parameter slice). With `out_adjoint` seeded per point (the rows of point n holding
   // ∂r(xₙ)/∂out), row n is then ∂r(xₙ)/∂θ. The input adjoint is the same as backward's.
   // Modules without parameters need not override it; those with parameters that do, say
   // so in has_per_point_gradients.
   virtual bool has_per_point_gradients() const { return parameter_count() == 0; }
   virtual void backward_per_point(const StreamLayout& layout, const Scalar* params,
                                   const Streams<Scalar>& in, const SavedTensors<Scalar>& saved,
-                                  Streams<Scalar>& out_adjoint, Eigen::Ref<Matrix<Scalar>> jacobian,
+                                  Streams<Scalar>& out_adjoint, JacobianRows<Scalar> jacobian,
                                   Streams<Scalar>* in_adjoint) const {
     if (parameter_count() > 0)
       throw std::logic_error("module '" + name() + "' has no per-point parameter gradients");

@@ -15,7 +15,7 @@ struct Sequential<Scalar>::Workspace {
   Streams<Scalar> adjoint, next_adjoint;
   Vector<Scalar> gradient;
   double loss = 0;
-  Matrix<Scalar> r, r_bar, jacobian;  // residuals_and_jacobian: one block's r, r̄ and J
+  Matrix<Scalar> r, r_bar;  // residuals_and_jacobian: one block's r and r̄
 };
 
 template <typename Scalar>
@@ -178,7 +178,6 @@ void Sequential<Scalar>::residuals_and_jacobian(const Scalar* params, const Stre
       if (!m->has_per_point_gradients())
         throw std::logic_error("Sequential::residuals_and_jacobian: module '" + m->name() +
                                "' has no per-point parameter gradients");
-  using RowMajor = Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
   const SingleThreadedEigen single_threaded_products;
   if (static_cast<int>(workspaces_.size()) < threads) workspaces_.resize(threads);
   for (auto& w : workspaces_)
@@ -200,24 +199,22 @@ void Sequential<Scalar>::residuals_and_jacobian(const Scalar* params, const Stre
       // r is points × C column-major; the output is point-major, i.e. rᵀ column-major.
       Eigen::Map<Matrix<Scalar>>(residuals + first * c_count, c_count, rows) = ws.r.transpose();
       if (!record) continue;
-      ws.jacobian.resize(rows, p);
       for (int c = 0; c < c_count; ++c) {
         ws.r_bar.setZero(rows, c_count);
         ws.r_bar.col(c).setOnes();
         ws.adjoint.resize(out.points, out.count, out.width());
         ws.adjoint.data.setZero();
         residual.backward(first, layout, out, ws.r_bar, ws.adjoint);
+        // This block's rows n·C + c: row stride C·P in the row-major output.
+        Scalar* rows_c = jacobian + (first * c_count + c) * p;
         for (size_t l = depth; l-- > 0;) {
           modules_[l]->backward_per_point(
               layout, params + offsets_[l], ws.activations[l], ws.saved[l], ws.adjoint,
-              ws.jacobian.middleCols(offsets_[l], modules_[l]->parameter_count()),
+              JacobianRows<Scalar>(rows_c + offsets_[l], rows, modules_[l]->parameter_count(),
+                                   Eigen::OuterStride<>(c_count * p)),
               l > 0 ? &ws.next_adjoint : nullptr);
           if (l > 0) std::swap(ws.adjoint, ws.next_adjoint);
         }
-        // Rows n·C + c of this block: stride C rows of the row-major output.
-        Eigen::Map<RowMajor, 0, Eigen::OuterStride<>>(jacobian + (first * c_count + c) * p, rows,
-                                                      p, Eigen::OuterStride<>(c_count * p)) =
-            ws.jacobian;
       }
     }
   }

@@ -39,15 +39,21 @@ void Dense<Scalar>::backward_per_point(const autodiff::StreamLayout&, const Scal
                                        const autodiff::Streams<Scalar>& in,
                                        const autodiff::SavedTensors<Scalar>&,
                                        autodiff::Streams<Scalar>& out_adjoint,
-                                       Eigen::Ref<Matrix<Scalar>> jacobian,
+                                       autodiff::JacobianRows<Scalar> jacobian,
                                        autodiff::Streams<Scalar>* in_adjoint) const {
-  for (Eigen::Index j = 0; j < in_; ++j) {
-    auto w_j = jacobian.middleCols(j * out_, out_).array();
-    w_j = out_adjoint.stream(0).array().colwise() * in.stream(0).col(j).array();
+  // Transposed, column s·N + n holds z̄_{s,n} (a_{s,n}): one contiguous vector per point and
+  // stream.
+  thread_local Matrix<Scalar> z_bar, a;
+  z_bar = out_adjoint.data.transpose();
+  a = in.data.transpose();
+  const Eigen::Index n_points = in.points;
+  for (Eigen::Index n = 0; n < n_points; ++n) {
+    Eigen::Map<Matrix<Scalar>> w(&jacobian(n, 0), out_, in_);
+    w.noalias() = z_bar.col(n) * a.col(n).transpose();
     for (int s = 1; s < in.count; ++s)
-      w_j += out_adjoint.stream(s).array().colwise() * in.stream(s).col(j).array();
+      w.noalias() += z_bar.col(s * n_points + n) * a.col(s * n_points + n).transpose();
+    Eigen::Map<Vector<Scalar>>(&jacobian(n, out_ * in_), out_) = z_bar.col(n);
   }
-  jacobian.rightCols(out_) = out_adjoint.stream(0);
   if (in_adjoint) {
     const Eigen::Map<const Matrix<Scalar>> weight(params, out_, in_);
     in_adjoint->resize(in.points, in.count, in_);

@@ -3,9 +3,10 @@
 // Affine layer z = W a + b over all streams at once: Z = A Wᵀ (one product over the stacked
 // streams), then b is added to the value rows only, since a constant has no derivatives.
 // Reverse: W̄ += Z̄ᵀ A, b̄ += Σₙ z̄⁰ₙ, Ā = Z̄ W.
-// Per point (backward_per_point): W̄ₙ = Σ_s z̄_{s,n} a_{s,n}ᵀ (outer products summed over the
-// S streams), b̄ₙ = z̄⁰ₙ; the column of W(i, j) is then Σ_s z̄_s(:, i) ⊙ a_s(:, j), one
-// elementwise product per stream over all points of the block.
+// Per point (backward_per_point): W̄ₙ = Σ_s z̄_{s,n} a_{s,n}ᵀ (S outer products, one per
+// stream), b̄ₙ = z̄⁰ₙ, written straight into point n's row of the row-major Jacobian, where
+// W̄ₙ is out × in contiguous: each row is written once while it sits in L1, and no block
+// of the Jacobian is ever transposed.
 //
 // Parameter slice: W as an out × in column-major matrix, then b (length out).
 #pragma once
@@ -36,7 +37,7 @@ class Dense final : public autodiff::Module<Scalar> {
                           const autodiff::Streams<Scalar>& in,
                           const autodiff::SavedTensors<Scalar>& saved,
                           autodiff::Streams<Scalar>& out_adjoint,
-                          Eigen::Ref<autodiff::Matrix<Scalar>> jacobian,
+                          autodiff::JacobianRows<Scalar> jacobian,
                           autodiff::Streams<Scalar>* in_adjoint) const override;
 
  private:
