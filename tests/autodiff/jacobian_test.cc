@@ -85,6 +85,7 @@ struct JacobianCase {
   int components;  // 1: LaplacianResidual, 2: ComplexResidual
   std::string name() const { return network.name() + (components == 1 ? "_laplacian" : "_complex"); }
 };
+void PrintTo(const JacobianCase& c, std::ostream* os) { *os << c.name(); }
 
 template <typename Scalar>
 std::unique_ptr<StreamResidual<Scalar>> make_residual(int components, const StreamLayout& layout,
