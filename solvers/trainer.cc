@@ -9,6 +9,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 #include <type_traits>
@@ -261,6 +262,17 @@ template <typename Scalar>
 bool Trainer<Scalar>::run_lm(const StageOptions& stage, const Callbacks& callbacks) {
   if (stage_step_ >= stage.steps) return true;
   resample();
+  // Ceres counts the entries of its dense Jacobian in an int.
+  double rows = 0;
+  for (size_t k = 0; k < terms_.size(); ++k)
+    rows += static_cast<double>(points_[k].rows()) * residuals_[k]->components();
+  const double entries = rows * static_cast<double>(field_.parameter_count());
+  if (entries > std::numeric_limits<int>::max())
+    throw std::runtime_error(
+        "training stage " + std::to_string(stage_ + 1) + " (lm): its Jacobian would have " +
+        std::to_string(static_cast<long long>(rows)) + " residuals x " +
+        std::to_string(field_.parameter_count()) + " parameters, more than the 2^31 - 1 " +
+        "entries Ceres' dense solvers hold; use fewer points (training.batch) or a smaller field");
   Eigen::VectorXd theta = field_.parameters().template cast<double>();
   std::vector<std::unique_ptr<TermCost<Scalar>>> costs;
   for (size_t k = 0; k < terms_.size(); ++k)

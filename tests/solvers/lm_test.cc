@@ -176,6 +176,27 @@ TEST(LevenbergMarquardt, EarlyConvergenceFinishesTheStage) {
   EXPECT_LT(trainer.step_milliseconds().size(), 402u);
 }
 
+// A Jacobian beyond Ceres' int-sized dense matrices is refused with a message, before any
+// of it is allocated.
+TEST(LevenbergMarquardt, OversizedJacobianIsRefused) {
+  RunSetup setup = load_run(
+      write_config(poisson_config("{type: siren, hidden: [256, 256, 256]}",
+                                  "{interior: 20000, boundary: 40}",
+                                  "    - {optimizer: lm, steps: 1}\n")),
+      {});
+  fields::Field<float> field(setup.field);
+  Trainer<float> trainer(*setup.problem, field, setup.training);
+  try {
+    trainer.run({});
+    ADD_FAILURE() << "no error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("20040 residuals x " +
+                                         std::to_string(field.parameter_count()) + " parameters"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 // ---- config ----------------------------------------------------------------------------
 
 struct Located {
