@@ -6,6 +6,7 @@
 // and can evaluate at any point without copies.
 #pragma once
 
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -16,6 +17,13 @@ namespace nfield::autodiff {
 // What a recording forward pass keeps for the reverse pass, besides the module's input.
 template <typename Scalar>
 using SavedTensors = std::vector<Matrix<Scalar>>;
+
+// Rows of a row-major Jacobian (points × parameters) with any row stride: the destination
+// of Module::backward_per_point, a view into Sequential::residuals_and_jacobian's output.
+template <typename Scalar>
+using JacobianRows =
+    Eigen::Map<Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>, 0,
+               Eigen::OuterStride<>>;
 
 template <typename Scalar>
 class Module {
@@ -38,6 +46,24 @@ class Module {
                         const Streams<Scalar>& in, const SavedTensors<Scalar>& saved,
                         Streams<Scalar>& out_adjoint, Scalar* gradient,
                         Streams<Scalar>* in_adjoint) const = 0;
+
+  // backward for per-point Jacobians (Sequential::residuals_and_jacobian): instead of adding
+  // the parameter gradient summed over points, ASSIGNS point n's own term of that sum to row
+  // n of `jacobian` (in.points × parameter_count(), row-major: this module's columns of the
+  // output rows, in the order of its parameter slice). With `out_adjoint` seeded per point (the rows of point n holding
+  // ∂r(xₙ)/∂out), row n is then ∂r(xₙ)/∂θ. The input adjoint is the same as backward's.
+  // Modules without parameters need not override it; those with parameters that do, say
+  // so in has_per_point_gradients.
+  virtual bool has_per_point_gradients() const { return parameter_count() == 0; }
+  virtual void backward_per_point(const StreamLayout& layout, const Scalar* params,
+                                  const Streams<Scalar>& in, const SavedTensors<Scalar>& saved,
+                                  Streams<Scalar>& out_adjoint, JacobianRows<Scalar> jacobian,
+                                  Streams<Scalar>* in_adjoint) const {
+    if (parameter_count() > 0)
+      throw std::logic_error("module '" + name() + "' has no per-point parameter gradients");
+    (void)jacobian;
+    backward(layout, params, in, saved, out_adjoint, nullptr, in_adjoint);
+  }
 };
 
 }  // namespace nfield::autodiff

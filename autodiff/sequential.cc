@@ -17,6 +17,7 @@ struct Sequential<Scalar>::Workspace {
   Streams<Scalar> adjoint, next_adjoint;
   Vector<Scalar> gradient;
   double loss = 0;
+  Matrix<Scalar> r, r_bar;  // residuals_and_jacobian: one block's r and r̄
 };
 
 namespace {
@@ -177,6 +178,65 @@ double Sequential<Scalar>::value_and_gradient(const Scalar* params, const Stream
     total += workspaces_[t]->loss;
   }
   return total;
+}
+
+template <typename Scalar>
+void Sequential<Scalar>::residuals_and_jacobian(const Scalar* params, const StreamLayout& layout,
+                                                const Eigen::Ref<const Matrix<Scalar>>& x,
+                                                const StreamResidual<Scalar>& residual,
+                                                Scalar* residuals, Scalar* jacobian) const {
+  if (modules_.empty()) throw std::logic_error("Sequential::residuals_and_jacobian: no modules");
+  const Eigen::Index n = x.rows(), block = options_.block_points, p = parameter_count_;
+  const Eigen::Index blocks = (n + block - 1) / block;
+  const int threads = thread_count(options_.threads);
+  const int c_count = residual.components();
+  const size_t depth = modules_.size();
+  const bool record = jacobian != nullptr;
+  if (record)  // before the parallel region: an exception may not leave it
+    for (const auto& m : modules_)
+      if (!m->has_per_point_gradients())
+        throw std::logic_error("Sequential::residuals_and_jacobian: module '" + m->name() +
+                               "' has no per-point parameter gradients");
+  const SingleThreadedEigen single_threaded_products;
+  if (static_cast<int>(workspaces_.size()) < threads) workspaces_.resize(threads);
+  for (auto& w : workspaces_)
+    if (!w) w = std::make_unique<Workspace>();
+#pragma omp parallel num_threads(threads)
+  {
+    Workspace& ws = workspace(omp_get_thread_num());
+    ws.activations.resize(depth + 1);
+    ws.saved.resize(depth);
+#pragma omp for schedule(static)
+    for (Eigen::Index b = 0; b < blocks; ++b) {
+      const Eigen::Index first = b * block, rows = std::min(block, n - first);
+      seed_input_streams<Scalar>(layout, x.middleRows(first, rows), ws.activations[0]);
+      for (size_t l = 0; l < depth; ++l)
+        modules_[l]->forward(layout, params + offsets_[l], ws.activations[l],
+                             ws.activations[l + 1], record ? &ws.saved[l] : nullptr);
+      const Streams<Scalar>& out = ws.activations[depth];
+      residual.evaluate(first, layout, out, ws.r);
+      // r is points × C column-major; the output is point-major, i.e. rᵀ column-major.
+      Eigen::Map<Matrix<Scalar>>(residuals + first * c_count, c_count, rows) = ws.r.transpose();
+      if (!record) continue;
+      for (int c = 0; c < c_count; ++c) {
+        ws.r_bar.setZero(rows, c_count);
+        ws.r_bar.col(c).setOnes();
+        ws.adjoint.resize(out.points, out.count, out.width());
+        ws.adjoint.data.setZero();
+        residual.backward(first, layout, out, ws.r_bar, ws.adjoint);
+        // This block's rows n·C + c: row stride C·P in the row-major output.
+        Scalar* rows_c = jacobian + (first * c_count + c) * p;
+        for (size_t l = depth; l-- > 0;) {
+          modules_[l]->backward_per_point(
+              layout, params + offsets_[l], ws.activations[l], ws.saved[l], ws.adjoint,
+              JacobianRows<Scalar>(rows_c + offsets_[l], rows, modules_[l]->parameter_count(),
+                                   Eigen::OuterStride<>(c_count * p)),
+              l > 0 ? &ws.next_adjoint : nullptr);
+          if (l > 0) std::swap(ws.adjoint, ws.next_adjoint);
+        }
+      }
+    }
+  }
 }
 
 template class Sequential<float>;

@@ -21,6 +21,7 @@
 
 #include "autodiff/module.h"
 #include "autodiff/stream_loss.h"
+#include "autodiff/stream_residual.h"
 
 namespace nfield::autodiff {
 
@@ -57,6 +58,25 @@ class Sequential {
   double value_and_gradient(const Scalar* params, const StreamLayout& layout,
                             const Eigen::Ref<const Matrix<Scalar>>& x,
                             const StreamLoss<Scalar>& loss, Scalar* gradient) const;
+
+  // Per-point residuals r(xₙ) ∈ R^C (C = residual.components()) and, unless `jacobian` is
+  // null, their Jacobian J = ∂r/∂θ, in Ceres' layout for one residual block:
+  //
+  //   residuals  N·C values, point-major: r_c(xₙ) at n·C + c
+  //   jacobian   (N·C) × parameter_count(), row-major: row n·C + c is ∂r_c(xₙ)/∂θ
+  //
+  // Jᵀr is then half the gradient of Σₙ ‖r(xₙ)‖². Points are independent, so one reverse
+  // pass per component c yields the rows of every point at once: seed the output adjoint
+  // with residual.backward for r̄ = e_c at all points (point n's rows then hold
+  // ∂r_c(xₙ)/∂outₙ), reverse through the modules, and let each module with parameters
+  // write point n's gradient term into row n (Module::backward_per_point) instead of
+  // summing over points. Per block this costs one forward pass, C reverse passes and
+  // writing the block's rows; blocks run in parallel as in value_and_gradient, each
+  // writing its own rows, so the result does not depend on the thread count.
+  void residuals_and_jacobian(const Scalar* params, const StreamLayout& layout,
+                              const Eigen::Ref<const Matrix<Scalar>>& x,
+                              const StreamResidual<Scalar>& residual, Scalar* residuals,
+                              Scalar* jacobian) const;
 
  private:
   struct Workspace;

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "solvers/residual.h"
 
+#include <cmath>
 #include <stdexcept>
 
 namespace nfield::solvers {
@@ -64,6 +65,48 @@ double ResidualLoss<Scalar>::evaluate(Eigen::Index first, const StreamLayout& la
   return scale_ * r.squaredNorm();
 }
 
+namespace {
+template <typename Scalar>
+void to_double(const Streams<Scalar>& from, Streams<double>& to) {
+  to.points = from.points;
+  to.count = from.count;
+  to.data = from.data.template cast<double>();
+}
+}  // namespace
+
+template <typename Scalar>
+ScaledResidual<Scalar>::ScaledResidual(const Residual& residual, double weight,
+                                       Eigen::Index total_points)
+    : residual_(residual), scale_(std::sqrt(weight / static_cast<double>(total_points))) {}
+
+template <typename Scalar>
+void ScaledResidual<Scalar>::evaluate(Eigen::Index first, const StreamLayout& layout,
+                                      const Streams<Scalar>& out,
+                                      autodiff::Matrix<Scalar>& r) const {
+  thread_local Streams<double> out_d;
+  thread_local Eigen::MatrixXd r_d;
+  to_double(out, out_d);
+  residual_.evaluate(first, layout, out_d, r_d);
+  r = (scale_ * r_d).template cast<Scalar>();
+}
+
+template <typename Scalar>
+void ScaledResidual<Scalar>::backward(Eigen::Index first, const StreamLayout& layout,
+                                      const Streams<Scalar>& out,
+                                      const autodiff::Matrix<Scalar>& r_bar,
+                                      Streams<Scalar>& adjoint) const {
+  thread_local Streams<double> out_d, adjoint_d;
+  to_double(out, out_d);
+  adjoint_d.points = out.points;
+  adjoint_d.count = out.count;
+  adjoint_d.data.setZero(out.data.rows(), out.data.cols());
+  const Eigen::MatrixXd r_bar_d = scale_ * r_bar.template cast<double>();
+  residual_.backward(first, layout, out_d, r_bar_d, adjoint_d);
+  adjoint.data += adjoint_d.data.template cast<Scalar>();
+}
+
+template class ScaledResidual<float>;
+template class ScaledResidual<double>;
 template class ResidualLoss<float>;
 template class ResidualLoss<double>;
 

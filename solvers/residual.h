@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "autodiff/stream_loss.h"
+#include "autodiff/stream_residual.h"
 #include "solvers/domain.h"
 
 namespace nfield::solvers {
@@ -84,6 +85,24 @@ class ResidualLoss final : public autodiff::StreamLoss<Scalar> {
   const Residual& residual_;
   double scale_;
   const Eigen::VectorXd* point_weights_;  // not owned; null: all 1
+};
+
+// Adapts a residual on a point set to autodiff::StreamResidual, scaled by √(w/N): the
+// least-squares form of a loss term, whose squares sum to the term's loss w/N Σ‖r‖²
+// (for Levenberg–Marquardt, which wants residuals and their Jacobian rather than a loss).
+template <typename Scalar>
+class ScaledResidual final : public autodiff::StreamResidual<Scalar> {
+ public:
+  ScaledResidual(const Residual& residual, double weight, Eigen::Index total_points);
+  int components() const override { return residual_.components(); }
+  void evaluate(Eigen::Index first, const StreamLayout& layout, const Streams<Scalar>& out,
+                autodiff::Matrix<Scalar>& r) const override;
+  void backward(Eigen::Index first, const StreamLayout& layout, const Streams<Scalar>& out,
+                const autodiff::Matrix<Scalar>& r_bar, Streams<Scalar>& adjoint) const override;
+
+ private:
+  const Residual& residual_;
+  double scale_;
 };
 
 }  // namespace nfield::solvers

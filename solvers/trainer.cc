@@ -1,12 +1,18 @@
 // SPDX-License-Identifier: MIT
 #include "solvers/trainer.h"
 
+#include <ceres/cost_function.h>
 #include <ceres/gradient_problem.h>
 #include <ceres/gradient_problem_solver.h>
+#include <ceres/problem.h>
+#include <ceres/solver.h>
 
 #include <chrono>
+#include <cmath>
 #include <limits>
 #include <sstream>
+#include <stdexcept>
+#include <type_traits>
 
 namespace nfield::solvers {
 namespace {
@@ -233,14 +239,73 @@ class LossFunction final : public ceres::FirstOrderFunction {
 
 class StepCallback final : public ceres::IterationCallback {
  public:
-  explicit StepCallback(std::function<bool()> on_step) : on_step_(std::move(on_step)) {}
+  using OnStep = std::function<bool(const ceres::IterationSummary&)>;
+  explicit StepCallback(OnStep on_step) : on_step_(std::move(on_step)) {}
   ceres::CallbackReturnType operator()(const ceres::IterationSummary& summary) override {
     if (summary.iteration == 0) return ceres::SOLVER_CONTINUE;
-    return on_step_() ? ceres::SOLVER_CONTINUE : ceres::SOLVER_TERMINATE_SUCCESSFULLY;
+    return on_step_(summary) ? ceres::SOLVER_CONTINUE : ceres::SOLVER_TERMINATE_SUCCESSFULLY;
   }
 
  private:
-  std::function<bool()> on_step_;
+  OnStep on_step_;
+};
+
+// One loss term as a Ceres cost function: N·C residuals √(w/N)·r (point-major) over the
+// single parameter block θ. Ceres evaluates it from one thread (num_threads = 1); the
+// Jacobian pass runs in parallel inside.
+template <typename Scalar>
+class TermCost final : public ceres::CostFunction {
+ public:
+  TermCost(const autodiff::Sequential<Scalar>& network, const autodiff::StreamLayout& layout,
+           const autodiff::Matrix<Scalar>& points,
+           std::unique_ptr<autodiff::StreamResidual<Scalar>> residual)
+      : network_(network), layout_(layout), points_(points), residual_(std::move(residual)) {
+    this->set_num_residuals(static_cast<int>(points.rows() * residual_->components()));
+    this->mutable_parameter_block_sizes()->push_back(static_cast<int>(network.parameter_count()));
+  }
+
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override {
+    const Eigen::Index m = this->num_residuals(), p = network_.parameter_count();
+    double* jacobian = jacobians ? jacobians[0] : nullptr;
+    if constexpr (std::is_same_v<Scalar, double>) {
+      network_.residuals_and_jacobian(parameters[0], layout_, points_, *residual_, residuals,
+                                      jacobian);
+    } else {
+      theta_ = Eigen::Map<const Eigen::VectorXd>(parameters[0], p).cast<Scalar>();
+      r_.resize(m);
+      if (jacobian) j_.resize(m * p);
+      network_.residuals_and_jacobian(theta_.data(), layout_, points_, *residual_, r_.data(),
+                                      jacobian ? j_.data() : nullptr);
+      Eigen::Map<Eigen::VectorXd>(residuals, m) = r_.template cast<double>();
+      if (jacobian) Eigen::Map<Eigen::VectorXd>(jacobian, m * p) = j_.template cast<double>();
+    }
+    const Eigen::Map<const Eigen::VectorXd> r(residuals, m);
+    if (!r.allFinite()) return false;
+    if (jacobian) {
+      if (!Eigen::Map<const Eigen::VectorXd>(jacobian, m * p).allFinite()) return false;
+      // A trust-region method evaluates Jacobians only at its iterates.
+      loss_at_iterate_ = r.squaredNorm();
+    }
+    return true;
+  }
+
+  // This term's loss (Σ f²) at the last point where the Jacobian was evaluated.
+  double loss_at_iterate() const { return loss_at_iterate_; }
+  // Its loss at θ, from a forward pass.
+  double loss_at(const double* theta) const {
+    Eigen::VectorXd r(this->num_residuals());
+    const double* parameters[] = {theta};
+    return Evaluate(parameters, r.data(), nullptr) ? r.squaredNorm() : NAN;
+  }
+
+ private:
+  const autodiff::Sequential<Scalar>& network_;
+  const autodiff::StreamLayout& layout_;
+  const autodiff::Matrix<Scalar>& points_;
+  std::unique_ptr<autodiff::StreamResidual<Scalar>> residual_;
+  mutable autodiff::Vector<Scalar> theta_, r_, j_;
+  mutable double loss_at_iterate_ = NAN;
 };
 
 }  // namespace
@@ -271,19 +336,10 @@ bool Trainer<Scalar>::run_lbfgs(const StageOptions& stage, const Callbacks& call
   options.update_state_every_iteration = true;
   bool stopped = false;
   double last = now_seconds();
-  StepCallback callback([&] {
+  StepCallback callback([&](const ceres::IterationSummary&) {
     // Ceres has just accepted a step; the parameter block holds it.
     field_.parameters() = theta.cast<Scalar>();
-    const double t = now_seconds();
-    step_ms_.push_back(1e3 * (t - last));
-    last = t;
-    ++stage_step_;
-    ++global_step_;
-    report(callbacks, stage, 0.0);
-    if (options_.checkpoint_every > 0 && global_step_ % options_.checkpoint_every == 0 &&
-        callbacks.checkpoint)
-      callbacks.checkpoint();
-    stopped = callbacks.stop_requested && callbacks.stop_requested();
+    stopped = !finish_ceres_step(stage, callbacks, last);
     return !stopped;
   });
   options.callbacks.push_back(&callback);
@@ -321,6 +377,94 @@ bool Trainer<Scalar>::run_lbfgs(const StageOptions& stage, const Callbacks& call
 }
 
 template <typename Scalar>
+bool Trainer<Scalar>::finish_ceres_step(const StageOptions& stage, const Callbacks& callbacks,
+                                        double& last) {
+  const double t = now_seconds();
+  step_ms_.push_back(1e3 * (t - last));
+  last = t;
+  ++stage_step_;
+  ++global_step_;
+  report(callbacks, stage, 0.0);
+  if (options_.checkpoint_every > 0 && global_step_ % options_.checkpoint_every == 0 &&
+      callbacks.checkpoint)
+    callbacks.checkpoint();
+  return !(callbacks.stop_requested && callbacks.stop_requested());
+}
+
+template <typename Scalar>
+bool Trainer<Scalar>::run_lm(const StageOptions& stage, const Callbacks& callbacks) {
+  if (stage_step_ >= stage.steps) return true;
+  resample();
+  // Ceres counts the entries of its dense Jacobian in an int.
+  double rows = 0;
+  for (size_t k = 0; k < terms_.size(); ++k)
+    rows += static_cast<double>(points_[k].rows()) * residuals_[k]->components();
+  const double entries = rows * static_cast<double>(field_.parameter_count());
+  if (entries > std::numeric_limits<int>::max())
+    throw std::runtime_error(
+        "training stage " + std::to_string(stage_ + 1) + " (lm): its Jacobian would have " +
+        std::to_string(static_cast<long long>(rows)) + " residuals x " +
+        std::to_string(field_.parameter_count()) + " parameters, more than the 2^31 - 1 " +
+        "entries Ceres' dense solvers hold; use fewer points (training.batch) or a smaller field");
+  Eigen::VectorXd theta = field_.parameters().template cast<double>();
+  std::vector<std::unique_ptr<TermCost<Scalar>>> costs;
+  for (size_t k = 0; k < terms_.size(); ++k)
+    costs.push_back(std::make_unique<TermCost<Scalar>>(
+        field_.network(), layouts_[k], points_scalar_[k],
+        std::make_unique<ScaledResidual<Scalar>>(*residuals_[k], terms_[k].weight,
+                                                 points_[k].rows())));
+  ceres::Problem::Options problem_options;
+  problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::Problem problem(problem_options);
+  for (const auto& cost : costs) problem.AddResidualBlock(cost.get(), nullptr, theta.data());
+
+  ceres::Solver::Options options;
+  options.minimizer_type = ceres::TRUST_REGION;
+  options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  options.linear_solver_type =
+      stage.linear_solver == "dense_normal_cholesky" ? ceres::DENSE_NORMAL_CHOLESKY : ceres::DENSE_QR;
+  options.initial_trust_region_radius = stage.initial_radius;
+  options.max_num_iterations = stage.steps - stage_step_;
+  // Run the steps asked for; stop early only when no step decreases the loss any more
+  // (the trust region collapses), not at Ceres' default relative tolerances, which end
+  // far above the accuracy a double-precision field can reach.
+  options.function_tolerance = 0;
+  options.gradient_tolerance = 0;
+  options.parameter_tolerance = 0;
+  // Evaluation is parallel inside each cost function already.
+  options.num_threads = 1;
+  options.logging_type = ceres::SILENT;
+  options.update_state_every_iteration = true;
+  bool stopped = false;
+  double last = now_seconds();
+  StepCallback callback([&](const ceres::IterationSummary& summary) {
+    field_.parameters() = theta.template cast<Scalar>();
+    double total = 0;
+    for (size_t k = 0; k < costs.size(); ++k) total += losses_[k] = costs[k]->loss_at_iterate();
+    // Ceres' cost is ½Σf²; should its last Jacobian not have been at the iterate, recompute.
+    if (!(std::abs(total - 2 * summary.cost) <= 1e-9 * 2 * summary.cost))
+      for (size_t k = 0; k < costs.size(); ++k) losses_[k] = costs[k]->loss_at(theta.data());
+    stopped = !finish_ceres_step(stage, callbacks, last);
+    return !stopped;
+  });
+  options.callbacks.push_back(&callback);
+  ceres::Solver::Summary summary;
+  ceres::Solve(options, &problem, &summary);
+  // Failing later (e.g. too many non-finite trial steps) ends the stage at its last iterate.
+  if (summary.termination_type == ceres::FAILURE && summary.iterations.empty())
+    throw std::runtime_error("training stage " + std::to_string(stage_ + 1) +
+                             " (lm): Ceres failed: " + summary.message);
+  field_.parameters() = theta.cast<Scalar>();
+  if (summary.iterations.size() <= 1)  // no step taken: report the losses at the start
+    for (size_t k = 0; k < costs.size(); ++k) losses_[k] = costs[k]->loss_at(theta.data());
+  if (!stopped) {
+    global_step_ += stage.steps - stage_step_;
+    stage_step_ = stage.steps;
+  }
+  return !stopped;
+}
+
+template <typename Scalar>
 bool Trainer<Scalar>::run(const Callbacks& callbacks) {
   started_ = now_seconds();
   started_step_ = global_step_;
@@ -328,6 +472,7 @@ bool Trainer<Scalar>::run(const Callbacks& callbacks) {
     const StageOptions& stage = options_.stages[stage_];
     const double stage_started = now_seconds();
     const bool finished = stage.optimizer == "lbfgs" ? run_lbfgs(stage, callbacks)
+                          : stage.optimizer == "lm"  ? run_lm(stage, callbacks)
                                                      : run_adam(stage, callbacks);
     if (!finished) return false;
     double total = 0;

@@ -7,12 +7,24 @@
 //          and takes one Adam step at the stage's scheduled learning rate.
 //   lbfgs  draws one point set per term and minimizes the summed loss on it with Ceres'
 //          L-BFGS (ceres::GradientProblemSolver), one step per Ceres iteration.
+//   lm     draws one point set per term and minimizes the same loss as a least-squares
+//          problem with Ceres' Levenberg–Marquardt (ceres::Problem, one parameter block θ
+//          in double, one cost function per loss term whose N·C residuals are √(w/N)·r at
+//          the term's points, so Ceres' ½Σf² is half the loss). Jacobians come from the
+//          reverse pass per point (Sequential::residuals_and_jacobian), in the training
+//          scalar, converted to double. A dense linear solver (the stage's linear_solver)
+//          factors the (Σ N·C) × P Jacobian: memory and time grow as N·P and N·P², which
+//          suits small fields (P up to a few thousand) and a few thousand points. One step
+//          per Ceres iteration, a rejected step included.
+//
+// A stage that stops early because its optimizer cannot decrease the loss further
+// (converged) counts as finished, with all its steps.
 //
 // A run is reproducible from its seed and thread count. The whole state (parameters, Adam
 // moments and step, stage and step counters, random engine, current points) is saved by
 // save_state and restored by load_state, so an interrupted Adam run resumed from its
 // checkpoint ends with the same parameters, bit for bit, as one never interrupted.
-// (An L-BFGS stage restarts its history when resumed.)
+// (An L-BFGS or LM stage restarts its history, and draws new points, when resumed.)
 //
 // training.sampler, adaptive, balance and causal (solvers/sampler.h, loss_balancing.h) hook
 // in here: each term draws through its own quasi-random sequence; every adaptive.every Adam
@@ -99,6 +111,10 @@ class Trainer {
   void balanced_gradient(Scalar* gradient);
   bool run_adam(const StageOptions& stage, const Callbacks& callbacks);
   bool run_lbfgs(const StageOptions& stage, const Callbacks& callbacks);
+  bool run_lm(const StageOptions& stage, const Callbacks& callbacks);
+  // After a Ceres iteration has been accepted or rejected: parameters, step counters,
+  // progress and checkpoints. Returns false when a stop is requested.
+  bool finish_ceres_step(const StageOptions& stage, const Callbacks& callbacks, double& last);
   void report(const Callbacks& callbacks, const StageOptions& stage, double lr);
 
   const Problem& problem_;

@@ -53,7 +53,7 @@ TrainingOptions TrainingOptions::from_config(const io::ConfigNode& node) {
     for (std::size_t i = 0; i < stages.size(); ++i) {
       const io::ConfigNode s = stages.at(i);
       StageOptions stage;
-      stage.optimizer = s.get_choice("optimizer", {"adam", "lbfgs"});
+      stage.optimizer = s.get_choice("optimizer", {"adam", "lbfgs", "lm"});
       stage.steps = s.get_in_range("steps", 0, 1 << 30);
       if (stage.optimizer == "adam") {
         stage.lr = s.get_or("lr", stage.lr);
@@ -61,8 +61,12 @@ TrainingOptions TrainingOptions::from_config(const io::ConfigNode& node) {
         stage.schedule = s.get_choice("schedule", {"constant", "cosine", "exponential"}, "constant");
         stage.lr_final = s.get_or("lr_final", std::min(stage.lr_final, stage.lr));
         s.require("lr_final", stage.lr_final > 0, "expected a learning rate > 0");
-      } else {
+      } else if (stage.optimizer == "lbfgs") {
         stage.memory = in_range_or(s, "memory", 1, 1000, 20);
+      } else {
+        stage.linear_solver =
+            s.get_choice("linear_solver", {"dense_qr", "dense_normal_cholesky"}, "dense_qr");
+        stage.initial_radius = in_range_or(s, "initial_radius", 1e-12, 1e16, 1e4);
       }
       s.reject_unknown_keys();
       o.stages.push_back(stage);
@@ -89,8 +93,11 @@ YAML::Node TrainingOptions::to_yaml() const {
       y["lr"] = s.lr;
       y["schedule"] = s.schedule;
       y["lr_final"] = s.lr_final;
-    } else {
+    } else if (s.optimizer == "lbfgs") {
       y["memory"] = s.memory;
+    } else {
+      y["linear_solver"] = s.linear_solver;
+      y["initial_radius"] = s.initial_radius;
     }
     n["stages"].push_back(y);
   }

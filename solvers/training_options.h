@@ -17,7 +17,14 @@
 //     causal: {epsilon: 1.0, slices: 32, every: 100}   # causal weights in time; absent: off
 //     stages:
 //       - {optimizer: adam, steps: 2000, lr: 1.0e-3, schedule: cosine, lr_final: 1.0e-5}
-//       - {optimizer: lbfgs, steps: 500}
+//       - {optimizer: lbfgs, steps: 500, memory: 20}
+//       - {optimizer: lm, steps: 200, linear_solver: dense_qr, initial_radius: 1.0e4}
+//
+// Stage keys by optimizer: adam reads lr, schedule, lr_final; lbfgs reads memory; lm
+// (Levenberg–Marquardt) reads linear_solver (dense_qr | dense_normal_cholesky, default
+// dense_qr) and initial_radius (Ceres' initial trust-region radius, default 1e4, in
+// [1e-12, 1e16]; the first damping is about its inverse). Keys of another optimizer are
+// rejected as unknown.
 #pragma once
 
 #include <cstdint>
@@ -31,12 +38,14 @@
 namespace nfield::solvers {
 
 struct StageOptions {
-  std::string optimizer = "adam";    // adam | lbfgs
+  std::string optimizer = "adam";    // adam | lbfgs | lm
   int steps = 1000;
   double lr = 1e-3;                  // adam: initial learning rate
   std::string schedule = "constant"; // adam: constant | cosine | exponential
   double lr_final = 1e-5;            // adam: learning rate at the last step (cosine, exponential)
   int memory = 20;                   // lbfgs: history length
+  std::string linear_solver = "dense_qr";  // lm: dense_qr | dense_normal_cholesky
+  double initial_radius = 1e4;       // lm: initial trust-region radius
 
   // The Adam learning rate at step `step` (0-based) of this stage.
   double learning_rate(int step) const;

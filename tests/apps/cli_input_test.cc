@@ -138,7 +138,7 @@ std::vector<BadConfig> bad_configs() {
        {"expected a list of 2 integers, got a list of 1"}},
       // Unknown choices: the message lists the valid ones.
       {"BadOptimizer", edit("optimizer: adam", "optimizer: adamw"), "optimizer: |adamw",
-       "training.stages[0].optimizer", {"expected one of adam, lbfgs; got 'adamw'"}},
+       "training.stages[0].optimizer", {"expected one of adam, lbfgs, lm; got 'adamw'"}},
       {"BadProblem", edit("problem: poisson", "problem: poison"), "problem: |poison", "problem",
        {"expected one of ", "poisson", "wave", "; got 'poison'"}},
       {"BadFieldType", edit("type: siren", "type: sirenn"), "type: |sirenn", "field.type",
