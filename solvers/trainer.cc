@@ -411,7 +411,9 @@ bool Trainer<Scalar>::run_lm(const StageOptions& stage, const Callbacks& callbac
   for (size_t k = 0; k < terms_.size(); ++k)
     costs.push_back(std::make_unique<TermCost<Scalar>>(
         field_.network(), layouts_[k], points_scalar_[k],
-        std::make_unique<ScaledResidual<Scalar>>(*residuals_[k], terms_[k].weight,
+        // λ of training.balance is held fixed here, as in L-BFGS; causal weights are not
+        // applied in this stage (its residuals are the plain ones).
+        std::make_unique<ScaledResidual<Scalar>>(*residuals_[k], terms_[k].weight * balance_[k],
                                                  points_[k].rows())));
   ceres::Problem::Options problem_options;
   problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
