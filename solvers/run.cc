@@ -16,6 +16,7 @@
 #include "io/atomic_write.h"
 #include "io/version.h"
 #include "solvers/grid_output.h"
+#include "solvers/hard_constraints.h"
 #include "solvers/trainer.h"
 
 namespace nfield::solvers {
@@ -179,10 +180,13 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
   if (!finished) std::printf("\ninterrupted at step %ld: writing the checkpoint and outputs\n", trainer.step());
   write_checkpoint(dir / "checkpoint.h5", field, trainer, config_text);
 
-  const GridMetrics grid = write_grid_outputs(*setup.problem, evaluator(field), setup.output);
+  const auto ansatz = setup.problem->ansatz();  // hard conditions: outputs see u, not N
+  const GridMetrics grid =
+      write_grid_outputs(*setup.problem, with_ansatz(evaluator(field), ansatz), setup.output);
   std::vector<std::pair<std::string, double>> extra;
-  OutputContext context{dir, [&field](const Eigen::MatrixXd& x) {
-                          return field.values(x.cast<Scalar>()).template cast<double>().eval();
+  OutputContext context{dir, [&field, ansatz](const Eigen::MatrixXd& x) {
+                          Eigen::MatrixXd n = field.values(x.cast<Scalar>()).template cast<double>();
+                          return ansatz ? ansatz->values(x, n) : n;
                         },
                         setup.output.grid};
   setup.problem->write_outputs(context, extra);
@@ -259,7 +263,8 @@ void evaluate_checkpoint(const std::filesystem::path& checkpoint, int grid_point
   RunSetup setup = load_run(config_copy, {}, out_dir);
   setup.output.grid.assign(setup.problem->domain().space_dim(), grid_points);
   const fields::Field<double> field = fields::load_field<double>(file);
-  const GridMetrics grid = write_grid_outputs(*setup.problem, evaluator(field), setup.output);
+  const GridMetrics grid = write_grid_outputs(
+      *setup.problem, with_ansatz(evaluator(field), setup.problem->ansatz()), setup.output);
   std::printf("wrote %s", out_dir.string().c_str());
   if (grid.has_error) std::printf(" (rel_l2 %.3e, max_abs_err %.3e)", grid.rel_l2, grid.max_abs_err);
   std::printf("\n");

@@ -7,6 +7,8 @@
 #include <chrono>
 #include <sstream>
 
+#include "solvers/hard_constraints.h"
+
 namespace nfield::solvers {
 namespace {
 
@@ -20,7 +22,7 @@ template <typename Scalar>
 Trainer<Scalar>::Trainer(const Problem& problem, fields::Field<Scalar>& field,
                          TrainingOptions options)
     : problem_(problem), field_(field), options_(std::move(options)), rng_(options_.seed) {
-  terms_ = problem_.loss_terms();
+  terms_ = with_ansatz(problem_.loss_terms(), problem_.ansatz());  // hard conditions: u = A + D·N
   for (const LossTerm& term : terms_) {
     names_.push_back(term.name);
     layouts_.emplace_back(term.spec);

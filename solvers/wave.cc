@@ -55,7 +55,7 @@ class Wave final : public Problem {
     equation.reject_unknown_keys();
     // (condition_terms rejects the empty mapping child_or_empty gives for an absent key.)
     if (context.root.has("conditions"))
-      conditions_ = condition_terms(context.root.child("conditions"), domain_, 1);
+      conditions_ = condition_terms(context.root.child("conditions"), domain_, 1, &ansatz_);
   }
 
   const Domain& domain() const override { return domain_; }
@@ -104,6 +104,7 @@ class Wave final : public Problem {
     return terms;
   }
 
+  std::shared_ptr<const Ansatz> ansatz() const override { return ansatz_; }
   bool has_exact() const override { return exact_ != nullptr; }
   Eigen::MatrixXd exact(const Eigen::MatrixXd& x) const override { return exact_->evaluate(x); }
 
@@ -113,6 +114,7 @@ class Wave final : public Problem {
   std::shared_ptr<io::Expression> speed_;         // when it varies (else null)
   std::shared_ptr<io::Expression> source_, exact_;
   std::vector<LossTerm> conditions_;
+  std::shared_ptr<const Ansatz> ansatz_;
 };
 
 }  // namespace
