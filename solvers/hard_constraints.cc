@@ -158,9 +158,23 @@ Jet Ansatz::factor_jet(const Eigen::MatrixXd& x, bool second) const {
     }
   if (initial_) {
     const auto [t0, t1] = domain_.time();
-    const Jet tau = linear_jet(x, d, domain_.time_column(), t0, 1.0 / (t1 - t0), second);
-    jet = jet * tau;
-    if (initial_->velocity) jet = jet * tau;
+    const int t = domain_.time_column();
+    if (initial_->time_scale > 0) {
+      // ψ = tanh(τ/s): ψ' = (1 − ψ²)/s, ψ'' = −2ψ(1 − ψ²)/s².
+      const double s = initial_->time_scale;
+      Jet psi = Jet::constant(x.rows(), d, 0.0);
+      if (!second) psi.hessian.clear();
+      psi.value = ((x.col(t).array() - t0) / s).tanh().matrix();
+      const Eigen::ArrayXd q = psi.value.array(), one_minus = 1.0 - q.square();
+      psi.gradient.col(t) = (one_minus / s).matrix();
+      if (second) psi.hessian[static_cast<size_t>(t * d + t)] = (-2.0 * q * one_minus / (s * s)).matrix();
+      jet = jet * psi;
+      if (initial_->velocity) jet = jet * psi;
+    } else {
+      const Jet tau = linear_jet(x, d, t, t0, 1.0 / (t1 - t0), second);
+      jet = jet * tau;
+      if (initial_->velocity) jet = jet * tau;
+    }
   }
   return jet;
 }
@@ -372,6 +386,7 @@ std::shared_ptr<const Ansatz> read_ansatz(const io::ConfigNode& conditions, cons
   std::optional<Ansatz::Dirichlet> dirichlet;
   std::optional<io::ConfigNode> dirichlet_item, value_item, velocity_item;
   std::vector<io::Expression> u0, v0;
+  double time_scale = 0;
   for (std::size_t i = 0; i < conditions.size(); ++i) {
     const io::ConfigNode item = conditions.at(i);
     if (item.get_choice("enforce", {"soft", "hard"}, "soft") != "hard") continue;
@@ -387,6 +402,8 @@ std::shared_ptr<const Ansatz> read_ansatz(const io::ConfigNode& conditions, cons
       if (slot) throw item.error("enforce", "a second hard initial " + type + " condition");
       slot = item;
       (type == "value" ? u0 : v0) = values;
+      if (type == "value" && item.has("time_scale"))
+        time_scale = item.get_positive<double>("time_scale");
     } else {
       const std::string type = item.get_choice("type", {"dirichlet", "neumann"});
       if (type == "neumann")
@@ -414,7 +431,7 @@ std::shared_ptr<const Ansatz> read_ansatz(const io::ConfigNode& conditions, cons
                                "a hard initial velocity needs the initial value hard too");
   std::optional<Ansatz::Initial> initial;
   if (value_item) {
-    initial = Ansatz::Initial{u0, std::nullopt};
+    initial = Ansatz::Initial{u0, std::nullopt, time_scale};
     if (velocity_item) initial->velocity = v0;
   }
   if (!dirichlet && !initial) return nullptr;

@@ -13,8 +13,12 @@
 //       ℓ_f = (x_a − lower_a)/(upper_a − lower_a) on a lower face, (upper_a − x_a)/(…) on an
 //       upper one (normalized so φ ∈ [0, 1] and N keeps the scale of u).
 //   Wave initial data (u(x,t0) = u0, u_t(x,t0) = v0), τ = t − t0, T = t1 − t0:
-//       A = u0(x) + τ v0(x),   D = (τ/T)²       (value only hard: A = u0, D = τ/T)
-//   both:  A = u0 + τ v0,   D = φ(x) (τ/T)².
+//       A = u0(x) + τ v0(x),   D = ψ(τ)² with ψ = τ/T   (value only hard: A = u0, D = ψ)
+//   both:  A = u0 + τ v0,   D = φ(x) ψ(τ)².
+//   With a time scale s (`time_scale: s` on the hard initial value), ψ = tanh(τ/s): D still
+//   vanishes to the same order at t0, but saturates at 1 for τ ≫ s, so N ≈ (u − A)/φ need
+//   not grow like 1/τ² (for a mode cos(ωτ) the polynomial factor asks N ~ ω²/2 near t0,
+//   hundreds for ω = 8π; the saturating one ~ s²ω²/2).
 //
 // The combined form is exact only for compatible data: g independent of t, u0 = g and v0 = 0
 // on the hard faces (checked at load; otherwise a config error). Then A = g on the faces,
@@ -90,6 +94,7 @@ class Ansatz {
   struct Initial {
     std::vector<io::Expression> value;                    // u0, one per channel
     std::optional<std::vector<io::Expression>> velocity;  // v0 when also hard
+    double time_scale = 0;  // s > 0: ψ = tanh(τ/s); 0: ψ = τ/T
   };
   Ansatz(const Domain& domain, int channels, std::optional<Dirichlet> dirichlet,
          std::optional<Initial> initial);

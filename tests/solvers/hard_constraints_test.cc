@@ -168,6 +168,16 @@ TEST(HardConstraints, WaveStreamsMatchFiniteDifferences) {
   spec.add_operator(wave);
   spec.add_operator(Eigen::MatrixXd::Identity(2, 2));
   expect_streams_match(ansatz, field, spec, random_points(domain, 12, 3), u_of);
+
+  // The saturating time factor ψ = tanh(τ/s).
+  const Ansatz saturating(domain, 1, Ansatz::Dirichlet{domain.faces(), expressions(domain, {"0"})},
+                          Ansatz::Initial{u0, v0, 0.3});
+  auto u_sat = [&](const Eigen::VectorXd& p) {
+    const double x = p(0), tau = p(1), psi = std::tanh(tau / 0.3);
+    const double a = std::sin(kPi * x) + 0.5 * std::sin(4 * kPi * x) + tau * std::sin(2 * kPi * x);
+    return a + x * (1 - x) * psi * psi * field.values(p.transpose())(0, 0);
+  };
+  expect_streams_match(saturating, field, spec, random_points(domain, 12, 4), u_sat);
 }
 
 // A nonlinear residual r = (u⁰)² + Σ_s u_s: its backward must see u, not N.
@@ -247,12 +257,14 @@ TEST(HardConstraints, BoundaryValuesAreExact) {
   }
 }
 
-TEST(HardConstraints, InitialValueAndVelocityAreExact) {
+class InitialData : public ::testing::TestWithParam<double> {};
+
+TEST_P(InitialData, ValueAndVelocityAreExact) {
   const Domain domain({0.0}, {1.0}, std::pair{0.5, 1.5});
   const auto u0 = expressions(domain, {"sin(pi*x) + 0.5*sin(4*pi*x)"});
   const auto v0 = expressions(domain, {"x*(1-x)*exp(x)"});
   const Ansatz ansatz(domain, 1, Ansatz::Dirichlet{domain.faces(), expressions(domain, {"0"})},
-                      Ansatz::Initial{u0, v0});
+                      Ansatz::Initial{u0, v0, GetParam()});
   Random rng(11);
   const Eigen::MatrixXd x = domain.sample_initial(rng, 64);
   ASSERT_EQ(x(0, 1), 0.5);
@@ -270,6 +282,9 @@ TEST(HardConstraints, InitialValueAndVelocityAreExact) {
   const Eigen::MatrixXd n_later = field.values(later);
   EXPECT_GT((ansatz.values(later, n_later) - ansatz.values(later, 0 * n_later)).norm(), 1e-3);
 }
+
+// 0: ψ = τ/T; 0.2: ψ = tanh(τ/0.2).
+INSTANTIATE_TEST_SUITE_P(HardConstraints, InitialData, ::testing::Values(0.0, 0.2));
 
 std::filesystem::path write_config(const std::string& name, const std::string& text) {
   const std::filesystem::path dir = std::filesystem::temp_directory_path() / "nfield_hard_test";
@@ -318,6 +333,10 @@ TEST(HardConstraints, ConfigErrors) {
   e = wave_error("time_g", "  - {on: boundary, type: dirichlet, value: \"t\", enforce: hard}\n"
                            "  - {on: initial, type: value, value: \"0\", enforce: hard}\n");
   EXPECT_NE(e.find("depends on t"), std::string::npos) << e;
+  e = wave_error("time_scale", "  - {on: initial, type: value, value: \"0\", enforce: hard, time_scale: -1}\n");
+  EXPECT_NE(e.find("time_scale"), std::string::npos) << e;
+  e = wave_error("soft_time_scale", "  - {on: initial, type: value, value: \"0\", time_scale: 0.1}\n");
+  EXPECT_NE(e.find("unknown key 'time_scale'"), std::string::npos) << e;
   e = wave_error("weight", "  - {on: boundary, type: dirichlet, value: \"0\", enforce: hard, weight: 3}\n");
   EXPECT_NE(e.find("takes no weight"), std::string::npos) << e;
   // Compatible data loads, and hard conditions give no loss terms.
