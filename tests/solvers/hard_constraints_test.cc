@@ -13,6 +13,7 @@
 #include <random>
 #include <string>
 
+#include "io/vtk_image.h"
 #include "solvers/conditions.h"
 #include "solvers/hard_constraints.h"
 #include "solvers/run.h"
@@ -399,6 +400,41 @@ TEST(HardConstraints, PoissonHardBeatsSoft) {
   EXPECT_LT(hard, soft);
   EXPECT_LT(hard_boundary, 1e-13);
   EXPECT_GT(soft_boundary, 1e-6);
+}
+
+// The written outputs see u, not N: after a short run (and again through nfield eval's
+// evaluate_checkpoint), the grid's u equals g on the boundary points to rounding.
+TEST(HardConstraints, GridOutputsAndEvalSeeTheAnsatz) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "nfield_hard_test";
+  RunSetup setup = load_run(write_config("outputs", R"yaml(
+problem: poisson
+domain: {lower: [0, 0], upper: [1, 2]}
+equation: {source: "2 + 2*x", exact: "x^2 + y + x*y^2"}
+conditions:
+  - {on: boundary, type: dirichlet, value: "x^2 + y + x*y^2", enforce: hard}
+field: {type: siren, hidden: [8], first_omega: 2, hidden_omega: 1}
+training:
+  precision: float
+  batch: {interior: 32}
+  stages: [{optimizer: adam, steps: 5, lr: 1.0e-2}]
+output: {grid: [9, 17], png: false}
+)yaml"), {}, dir / "outputs_run");
+  ASSERT_EQ(execute_run(setup), 0);
+  evaluate_checkpoint(dir / "outputs_run" / "checkpoint.h5", 9, dir / "outputs_eval");
+  for (const auto& path : {dir / "outputs_run" / "solution.vti", dir / "outputs_eval" / "solution.vti"}) {
+    const io::ImageData image = io::read_vti(path);
+    const Eigen::MatrixXd x = image.grid.points(2);
+    const Eigen::VectorXd u = image.arrays.at("u");
+    double boundary = 0, interior = 0;
+    for (Eigen::Index r = 0; r < x.rows(); ++r) {
+      const double a = x(r, 0), b = x(r, 1);
+      const double err = std::abs(u(r) - (a * a + b + a * b * b));
+      const bool on_face = a == 0 || a == 1 || b == 0 || b == 2;
+      (on_face ? boundary : interior) = std::max(on_face ? boundary : interior, err);
+    }
+    EXPECT_LT(boundary, 1e-12) << path;
+    EXPECT_GT(interior, 1e-4) << path << ": the network contributes inside";
+  }
 }
 
 }  // namespace
