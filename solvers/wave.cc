@@ -15,7 +15,9 @@
 //     - {on: initial, type: value, value: "sin(pi*x)", weight: 10}
 //     - {on: initial, type: velocity, value: "0", weight: 10}
 //
-// The interior residual is r = u_tt − c²Δu − f (loss term "pde").
+// The interior residual is r = u_tt − c²Δu − f (loss term "pde"). With `enforce: hard` on
+// the Dirichlet and initial items, u = u0 + τ v0 + φ(x) ψ(τ)² N satisfies them exactly and
+// "pde" is the only loss term (solvers/hard_constraints.h).
 //
 // How the second derivatives travel: a constant speed makes the wave operator one operator
 // stream tr(C ∇²u) with C = diag(−c², …, −c², 1) over the axes (x…, t), so a 1D + time

@@ -287,6 +287,25 @@ TEST_P(InitialData, ValueAndVelocityAreExact) {
 // 0: ψ = τ/T; 0.2: ψ = tanh(τ/0.2).
 INSTANTIATE_TEST_SUITE_P(HardConstraints, InitialData, ::testing::Values(0.0, 0.2));
 
+// Orders above two (Taylor streams) are rejected, not silently mapped wrong.
+TEST(HardConstraints, TaylorStreamsAreRejected) {
+  const Domain domain({0.0}, {1.0});
+  auto ansatz = std::make_shared<const Ansatz>(
+      domain, 1, Ansatz::Dirichlet{domain.faces(), expressions(domain, {"0"})}, std::nullopt);
+  LossTerm term;
+  term.name = "biharmonic";
+  term.spec = autodiff::StreamSpec::values(1);
+  term.spec.set_taylor(Eigen::MatrixXd::Ones(1, 1), 4);
+  try {
+    with_ansatz({term}, ansatz);
+    FAIL() << "expected std::invalid_argument";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("Taylor"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(ansatz->streams(StreamLayout(term.spec), Eigen::MatrixXd::Zero(3, 1)),
+               std::invalid_argument);
+}
+
 std::filesystem::path write_config(const std::string& name, const std::string& text) {
   const std::filesystem::path dir = std::filesystem::temp_directory_path() / "nfield_hard_test";
   std::filesystem::create_directories(dir);
@@ -367,6 +386,7 @@ conditions:
 field: {type: siren, hidden: [16, 16], first_omega: 2, hidden_omega: 1}
 training:
   seed: 0
+  threads: 1
   precision: double
   batch: {interior: 128, boundary: 64}
   stages:
