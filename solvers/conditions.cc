@@ -2,6 +2,7 @@
 #include "solvers/conditions.h"
 
 #include "io/registry.h"
+#include "solvers/hard_constraints.h"
 
 namespace nfield::solvers {
 
@@ -70,12 +71,20 @@ LinearResidual value_residual(const Eigen::MatrixXd& target) {
 }  // namespace
 
 std::vector<LossTerm> condition_terms(const io::ConfigNode& conditions, const Domain& domain,
-                                      int output_dim) {
+                                      int output_dim, std::shared_ptr<const Ansatz>* ansatz) {
   std::vector<LossTerm> terms;
   if (conditions.is_null()) return terms;
   conditions.require(conditions.is_sequence(), "expected a list of conditions");
+  if (ansatz) *ansatz = read_ansatz(conditions, domain, output_dim);
   for (std::size_t i = 0; i < conditions.size(); ++i) {
     const io::ConfigNode item = conditions.at(i);
+    if (item.get_choice("enforce", {"soft", "hard"}, "soft") == "hard") {
+      if (!ansatz)
+        throw item.error("enforce", "this problem does not support enforce: hard (poisson and "
+                                    "wave do); use enforce: soft");
+      item.reject_unknown_keys();
+      continue;  // enforced by the ansatz, no loss term
+    }
     const bool initial = item.has("on") && !item.yaml()["on"].IsSequence() &&
                          Registry<int>::lower(item.get<std::string>("on")) == "initial";
     LossTerm term;

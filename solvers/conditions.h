@@ -10,8 +10,14 @@
 // `value` is one expression, or a list with one per output channel (complex fields: real,
 // imaginary). `weight` (default 1) scales the term. Each condition is one loss term drawing
 // its points from the `boundary` (faces) or `initial` batch.
+//
+// `enforce: hard` (default soft) makes a Dirichlet or initial value/velocity condition exact
+// instead: no loss term, the field's output becomes u = A + D·N (solvers/hard_constraints.h
+// has the ansatz and its limits). Neumann conditions stay soft. Only problems that pass the
+// `ansatz` out-parameter (poisson, wave) accept hard items; others reject them.
 #pragma once
 
+#include <memory>
 #include <vector>
 
 #include "io/config.h"
@@ -19,8 +25,10 @@
 
 namespace nfield::solvers {
 
+class Ansatz;
 std::vector<LossTerm> condition_terms(const io::ConfigNode& conditions, const Domain& domain,
-                                      int output_dim);
+                                      int output_dim,
+                                      std::shared_ptr<const Ansatz>* ansatz = nullptr);
 
 // Per-channel expressions from a `value` entry (one string, or a list of output_dim).
 std::vector<io::Expression> channel_expressions(const io::ConfigNode& node, std::string_view key,

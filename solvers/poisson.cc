@@ -21,7 +21,7 @@ class Poisson final : public Problem {
     source_ = std::make_shared<io::Expression>(equation.get_expression("source", vars));
     if (equation.has("exact")) exact_ = std::make_shared<io::Expression>(equation.get_expression("exact", vars));
     equation.reject_unknown_keys();
-    conditions_ = condition_terms(context.root.child_or_empty("conditions"), domain_, 1);
+    conditions_ = condition_terms(context.root.child_or_empty("conditions"), domain_, 1, &ansatz_);
   }
 
   const Domain& domain() const override { return domain_; }
@@ -45,6 +45,7 @@ class Poisson final : public Problem {
     return terms;
   }
 
+  std::shared_ptr<const Ansatz> ansatz() const override { return ansatz_; }
   bool has_exact() const override { return exact_ != nullptr; }
   Eigen::MatrixXd exact(const Eigen::MatrixXd& x) const override { return exact_->evaluate(x); }
 
@@ -52,6 +53,7 @@ class Poisson final : public Problem {
   Domain domain_;
   std::shared_ptr<io::Expression> source_, exact_;
   std::vector<LossTerm> conditions_;
+  std::shared_ptr<const Ansatz> ansatz_;
 };
 
 }  // namespace

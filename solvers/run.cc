@@ -18,6 +18,7 @@
 #include "io/atomic_write.h"
 #include "io/version.h"
 #include "solvers/grid_output.h"
+#include "solvers/hard_constraints.h"
 #include "solvers/trainer.h"
 
 namespace nfield::solvers {
@@ -186,7 +187,8 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
     callbacks.progress = [&printer](const Progress& p) { printer(p); };
     callbacks.stage_error = [&] {
       return setup.problem->has_exact()
-                 ? grid_error(*setup.problem, evaluator(field), setup.output).rel_l2
+                 ? grid_error(*setup.problem, with_ansatz(evaluator(field), setup.problem->ansatz()),
+                              setup.output).rel_l2
                  : std::numeric_limits<double>::quiet_NaN();
     };
     callbacks.checkpoint = [&] { write_checkpoint(dir / "checkpoint.h5", field, trainer, config_text, config_dir); };
@@ -196,10 +198,13 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
   if (!finished) std::printf("\ninterrupted at step %ld: writing the checkpoint and outputs\n", trainer.step());
   write_checkpoint(dir / "checkpoint.h5", field, trainer, config_text, config_dir);
 
-  const GridMetrics grid = write_grid_outputs(*setup.problem, evaluator(field), setup.output);
+  const auto ansatz = setup.problem->ansatz();  // hard conditions: outputs see u, not N
+  const GridMetrics grid =
+      write_grid_outputs(*setup.problem, with_ansatz(evaluator(field), ansatz), setup.output);
   std::vector<std::pair<std::string, double>> extra;
-  OutputContext context{dir, [&field](const Eigen::MatrixXd& x) {
-                          return field.values(x.cast<Scalar>()).template cast<double>().eval();
+  OutputContext context{dir, [&field, ansatz](const Eigen::MatrixXd& x) {
+                          Eigen::MatrixXd n = field.values(x.cast<Scalar>()).template cast<double>();
+                          return ansatz ? ansatz->values(x, n) : n;
                         },
                         setup.output.grid};
   setup.problem->write_outputs(context, extra);
@@ -264,8 +269,8 @@ RunSetup load_run(const std::filesystem::path& config, const std::vector<std::st
                                               s.problem->output_dim(), s.training.seed);
   s.output = output_options(s.root.child_or_empty("output"), s.problem->domain(), config,
                             out_dir_override);
-  // The batch keys are the problem's loss-term kinds: a misspelled or unused one is an error,
-  // and the resolved config lists only those the problem draws.
+  // The batch keys are the problem's loss-term kinds: a misspelled one is an error, and the
+  // resolved config lists only those the problem draws.
   std::vector<std::string> batch_keys;
   for (const LossTerm& term : s.problem->loss_terms()) {
     if (!s.training.batch.count(term.batch_key))
@@ -274,8 +279,14 @@ RunSetup load_run(const std::filesystem::path& config, const std::vector<std::st
     if (std::find(batch_keys.begin(), batch_keys.end(), term.batch_key) == batch_keys.end())
       batch_keys.push_back(term.batch_key);
   }
-  if (s.root.child_or_empty("training").has("batch"))
-    s.root.child("training").child("batch").expect_keys(batch_keys);
+  // The common kinds stay valid when a problem does not draw them (boundary when every
+  // condition is hard, initial without time): one config can switch such options.
+  if (s.root.child_or_empty("training").has("batch")) {
+    std::vector<std::string> allowed = batch_keys;
+    for (const char* common : {"interior", "boundary", "initial"})
+      if (std::find(allowed.begin(), allowed.end(), common) == allowed.end()) allowed.push_back(common);
+    s.root.child("training").child("batch").expect_keys(allowed);
+  }
   std::erase_if(s.training.batch, [&](const auto& entry) {
     return std::find(batch_keys.begin(), batch_keys.end(), entry.first) == batch_keys.end();
   });
@@ -309,7 +320,8 @@ void evaluate_checkpoint(const std::filesystem::path& checkpoint, int grid_point
   RunSetup setup = load_run(config_copy, {}, out_dir, data_dir);
   setup.output.grid.assign(setup.problem->domain().space_dim(), grid_points);
   const fields::Field<double> field = fields::load_field<double>(file);
-  const GridMetrics grid = write_grid_outputs(*setup.problem, evaluator(field), setup.output);
+  const GridMetrics grid = write_grid_outputs(
+      *setup.problem, with_ansatz(evaluator(field), setup.problem->ansatz()), setup.output);
   std::printf("wrote %s", out_dir.string().c_str());
   if (grid.has_error) std::printf(" (rel_l2 %.3e, max_abs_err %.3e)", grid.rel_l2, grid.max_abs_err);
   std::printf("\n");

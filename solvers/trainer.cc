@@ -14,6 +14,8 @@
 #include <stdexcept>
 #include <type_traits>
 
+#include "solvers/hard_constraints.h"
+
 namespace nfield::solvers {
 namespace {
 
@@ -27,7 +29,7 @@ template <typename Scalar>
 Trainer<Scalar>::Trainer(const Problem& problem, fields::Field<Scalar>& field,
                          TrainingOptions options)
     : problem_(problem), field_(field), options_(std::move(options)), rng_(options_.seed) {
-  terms_ = problem_.loss_terms();
+  terms_ = with_ansatz(problem_.loss_terms(), problem_.ansatz());  // hard conditions: u = A + D·N
   for (const LossTerm& term : terms_) {
     names_.push_back(term.name);
     layouts_.emplace_back(term.spec);

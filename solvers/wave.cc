@@ -15,7 +15,9 @@
 //     - {on: initial, type: value, value: "sin(pi*x)", weight: 10}
 //     - {on: initial, type: velocity, value: "0", weight: 10}
 //
-// The interior residual is r = u_tt − c²Δu − f (loss term "pde").
+// The interior residual is r = u_tt − c²Δu − f (loss term "pde"). With `enforce: hard` on
+// the Dirichlet and initial items, u = u0 + τ v0 + φ(x) ψ(τ)² N satisfies them exactly and
+// "pde" is the only loss term (solvers/hard_constraints.h).
 //
 // How the second derivatives travel: a constant speed makes the wave operator one operator
 // stream tr(C ∇²u) with C = diag(−c², …, −c², 1) over the axes (x…, t), so a 1D + time
@@ -55,7 +57,7 @@ class Wave final : public Problem {
     equation.reject_unknown_keys();
     // (condition_terms rejects the empty mapping child_or_empty gives for an absent key.)
     if (context.root.has("conditions"))
-      conditions_ = condition_terms(context.root.child("conditions"), domain_, 1);
+      conditions_ = condition_terms(context.root.child("conditions"), domain_, 1, &ansatz_);
   }
 
   const Domain& domain() const override { return domain_; }
@@ -104,6 +106,7 @@ class Wave final : public Problem {
     return terms;
   }
 
+  std::shared_ptr<const Ansatz> ansatz() const override { return ansatz_; }
   bool has_exact() const override { return exact_ != nullptr; }
   Eigen::MatrixXd exact(const Eigen::MatrixXd& x) const override { return exact_->evaluate(x); }
 
@@ -113,6 +116,7 @@ class Wave final : public Problem {
   std::shared_ptr<io::Expression> speed_;         // when it varies (else null)
   std::shared_ptr<io::Expression> source_, exact_;
   std::vector<LossTerm> conditions_;
+  std::shared_ptr<const Ansatz> ansatz_;
 };
 
 }  // namespace

@@ -126,11 +126,11 @@ std::vector<BadConfig> bad_configs() {
        {"expected widths in [1, 16384]"}},
       {"EmptyStages", edit("    - {optimizer: adam, steps: 3, lr: 1.0e-3}\n", "    []\n"),
        "    |[]", "training.stages", {"expected a non-empty list of stages"}},
-      // Batch entries are the problem's point kinds: a misspelled or unused one is an error.
+      // Batch entries are point kinds: a misspelled one is an error.
       {"MisspelledBatchKey", edit("batch: {interior: 32,", "batch: {interor: 32,"),
-       "batch: {|interor", "training.batch", {"unknown key 'interor' (valid keys: interior, boundary)"}},
-      {"UnusedBatchKey", edit("boundary: 16}", "boundary: 16, initial: 8}"), "|initial: 8",
-       "training.batch", {"unknown key 'initial' (valid keys: interior, boundary)"}},
+       "batch: {|interor", "training.batch", {"unknown key 'interor' (valid keys: interior, boundary, initial)"}},
+      {"MisspelledBoundaryBatchKey", edit("boundary: 16}", "boundry: 16}"), "|boundry: 16",
+       "training.batch", {"unknown key 'boundry' (valid keys: interior, boundary, initial)"}},
       // Lists of the wrong length.
       {"UpperLongerThanLower", edit("upper: [1, 1]", "upper: [1, 1, 1]"), "upper: |[1, 1, 1]",
        "domain.upper", {"expected a list of 2 numbers, got a list of 3"}},

@@ -1,0 +1,167 @@
+// SPDX-License-Identifier: MIT
+//
+// Hard (exactly enforced) boundary and initial conditions by an ansatz on the field's output.
+//
+// A condition with `enforce: hard` is not a loss term: the network N is wrapped as
+//
+//     u(x) = A(x) + D(x) · N(x)                   (per output channel c: u_c = A_c + D N_c)
+//
+// with a base A that satisfies the hard conditions and a scalar factor D that vanishes where
+// they hold, so u satisfies them for every θ:
+//
+//   Dirichlet on faces F (u = g):   A = g,   D = φ,   φ(x) = Π_{f∈F} ℓ_f(x),
+//       ℓ_f = (x_a − lower_a)/(upper_a − lower_a) on a lower face, (upper_a − x_a)/(…) on an
+//       upper one (normalized so φ ∈ [0, 1] and N keeps the scale of u).
+//   Wave initial data (u(x,t0) = u0, u_t(x,t0) = v0), τ = t − t0, T = t1 − t0:
+//       A = u0(x) + τ v0(x),   D = ψ(τ)² with ψ = τ/T   (value only hard: A = u0, D = ψ)
+//   both:  A = u0 + τ v0,   D = φ(x) ψ(τ)².
+//   With a time scale s (`time_scale: s` on the hard initial value), ψ = tanh(τ/s): D still
+//   vanishes to the same order at t0, but saturates at 1 for τ ≫ s, so N ≈ (u − A)/φ need
+//   not grow like 1/τ² (for a mode cos(ωτ) the polynomial factor asks N ~ ω²/2 near t0,
+//   hundreds for ω = 8π; the saturating one ~ s²ω²/2).
+//
+// The combined form is exact only for compatible data: g independent of t, u0 = g and v0 = 0
+// on the hard faces (checked at load; otherwise a config error). Then A = g on the faces,
+// A(·,t0) = u0, A_t(·,t0) = v0, and D, D_t vanish at t0 and D on the faces.
+//
+// Several hard Dirichlet items are supported when they carry the same `value` expression(s)
+// (compared as text, per channel): g is that expression evaluated inside the box. Different
+// values on different hard faces would need a blended extension of g; they are rejected.
+//
+// Derivative streams. A residual reads the streams of u for its StreamLayout (value,
+// tangents u⁽ⁱ⁾ = ∂u/∂vᵢ along the spec's directions vᵢ, operator streams
+// u^[C] = Σᵢⱼ Cᵢⱼ ∂²u/∂vᵢ∂vⱼ). The product rule maps the network's streams, computed with
+// the same layout, onto them:
+//
+//     u⁰    = A⁰ + D⁰ N⁰
+//     u⁽ⁱ⁾  = A⁽ⁱ⁾ + D⁽ⁱ⁾ N⁰ + D⁰ N⁽ⁱ⁾
+//     u^[C] = A^[C] + D^[C] N⁰ + Σᵢⱼ Cᵢⱼ (D⁽ⁱ⁾N⁽ʲ⁾ + D⁽ʲ⁾N⁽ⁱ⁾) + D⁰ N^[C]
+//
+// and its adjoint maps ū back onto N̄ (linear in N, so exact):
+//
+//     N̄⁰    += D⁰ ū⁰ + Σᵢ D⁽ⁱ⁾ ū⁽ⁱ⁾ + Σ_C D^[C] ū^[C]
+//     N̄⁽ʲ⁾  += D⁰ ū⁽ʲ⁾ + Σ_C ū^[C] Σᵢ (Cᵢⱼ + Cⱼᵢ) D⁽ⁱ⁾
+//     N̄^[C] += D⁰ ū^[C]
+//
+// The streams of A and D come from their gradient ∇ and Hessian H in input coordinates:
+// a⁽ⁱ⁾ = ∇a·vᵢ, a^[C] = Σ_ab (V C Vᵀ)_ab H_ab. D is a polynomial: exact. A is built from the
+// config's expressions: a constant is exact (zero derivatives); otherwise 4th-order central
+// differences with step h_a = 10⁻³ × (extent of axis a), the tensor product of the stencil
+// (1, −8, 0, 8, −1)/12h for mixed second derivatives and (−1, 16, −30, 16, −1)/12h² on the
+// diagonal, skipped along axes the expression does not mention. The error is about
+// h⁴ max|∂⁵g|/30 (first) and h⁴ max|∂⁶g|/90 (second) plus rounding ~10 ε max|g| / h²; for
+// g = sin(4πx) on [0, 1] both are below 1e-9 relative. The stencil reaches 2h outside the
+// box, so the expressions must be smooth in a neighbourhood of it.
+//
+// Taylor streams (orders > 2) are not supported: a layout with them throws.
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "io/config.h"
+#include "io/expression.h"
+#include "solvers/residual.h"
+
+namespace nfield::solvers {
+
+// A scalar function's value, gradient and Hessian at n points (input coordinates).
+struct Jet {
+  Eigen::VectorXd value;          // n
+  Eigen::MatrixXd gradient;       // n × d
+  std::vector<Eigen::VectorXd> hessian;  // d·d entries (row-major), each n
+
+  static Jet constant(Eigen::Index n, int d, double c);
+  Jet operator*(const Jet& other) const;
+  Jet operator+(const Jet& other) const;
+};
+
+// The streams of A (points × channels per stream) and D (points × 1 per stream) for one
+// layout and point set.
+struct AnsatzStreams {
+  Streams<double> base;
+  Streams<double> factor;
+};
+
+class Ansatz {
+ public:
+  struct Dirichlet {
+    std::vector<Face> faces;
+    std::vector<io::Expression> values;  // one per channel
+  };
+  struct Initial {
+    std::vector<io::Expression> value;                    // u0, one per channel
+    std::optional<std::vector<io::Expression>> velocity;  // v0 when also hard
+    double time_scale = 0;  // s > 0: ψ = tanh(τ/s); 0: ψ = τ/T
+  };
+  Ansatz(const Domain& domain, int channels, std::optional<Dirichlet> dirichlet,
+         std::optional<Initial> initial);
+
+  int channels() const { return channels_; }
+  bool has_dirichlet() const { return dirichlet_.has_value(); }
+  bool has_initial() const { return initial_.has_value(); }
+
+  // Jets of the base (one per channel) and of the factor at x.
+  std::vector<Jet> base_jets(const Eigen::MatrixXd& x, bool second) const;
+  Jet factor_jet(const Eigen::MatrixXd& x, bool second) const;
+
+  // A and D streams at x for `layout` (throws std::invalid_argument on Taylor streams).
+  AnsatzStreams streams(const StreamLayout& layout, const Eigen::MatrixXd& x) const;
+  // u streams from network streams n for points [first, first + n.points) of `s`.
+  void apply(const StreamLayout& layout, const AnsatzStreams& s, Eigen::Index first,
+             const Streams<double>& n, Streams<double>& u) const;
+  // n_bar += ∂(Σ ū ⊙ u)/∂n.
+  void adjoint(const StreamLayout& layout, const AnsatzStreams& s, Eigen::Index first,
+               const Streams<double>& u_bar, Streams<double>& n_bar) const;
+  // u values at x from network values (n × channels).
+  Eigen::MatrixXd values(const Eigen::MatrixXd& x, const Eigen::MatrixXd& network_values) const;
+
+ private:
+  Jet expression_jet(const io::Expression& e, const Eigen::MatrixXd& x, bool second,
+                     bool frozen_time) const;
+
+  const Domain domain_;
+  int channels_;
+  std::optional<Dirichlet> dirichlet_;
+  std::optional<Initial> initial_;
+};
+
+// Reads the hard items of a `conditions:` list (enforce: hard); null when there are none.
+// Config errors: hard Neumann, hard velocity without a hard value, different values on hard
+// Dirichlet faces, a t-dependent hard Dirichlet value together with hard initial data,
+// incompatible initial data on hard faces. Problems that pass no `ansatz` out-parameter to
+// condition_terms reject hard items.
+std::shared_ptr<const Ansatz> read_ansatz(const io::ConfigNode& conditions, const Domain& domain,
+                                          int output_dim);
+
+// A residual on u = A + D N: transforms the network streams before `inner` and chains its
+// adjoint back. A and D streams are precomputed for the point set it is built for.
+class AnsatzResidual final : public Residual {
+ public:
+  AnsatzResidual(std::shared_ptr<const Ansatz> ansatz, std::unique_ptr<Residual> inner,
+                 const StreamLayout& layout, const Eigen::MatrixXd& points);
+  int components() const override { return inner_->components(); }
+  void evaluate(Eigen::Index first, const StreamLayout& layout, const Streams<double>& out,
+                Eigen::MatrixXd& r) const override;
+  void backward(Eigen::Index first, const StreamLayout& layout, const Streams<double>& out,
+                const Eigen::MatrixXd& r_bar, Streams<double>& adjoint) const override;
+
+ private:
+  std::shared_ptr<const Ansatz> ansatz_;
+  std::unique_ptr<Residual> inner_;
+  AnsatzStreams streams_;
+};
+
+// The loss terms with each residual wrapped in AnsatzResidual (unchanged when ansatz is null).
+std::vector<LossTerm> with_ansatz(std::vector<LossTerm> terms,
+                                  std::shared_ptr<const Ansatz> ansatz);
+
+// Streams of u from a function giving the network's streams (same signature as
+// StreamEvaluator in grid_output.h; unchanged when ansatz is null).
+using NetworkStreams =
+    std::function<Streams<double>(const StreamLayout&, const Eigen::MatrixXd&)>;
+NetworkStreams with_ansatz(NetworkStreams network, std::shared_ptr<const Ansatz> ansatz);
+
+}  // namespace nfield::solvers
