@@ -11,6 +11,7 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <optional>
 #include <nlohmann/json.hpp>
 
 #include "fields/field_config.h"
@@ -176,6 +177,10 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
     std::ofstream(p) << config_text << "\n";
   });
 
+  const OutputContext context{dir, [&field](const Eigen::MatrixXd& x) {
+                                return field.values(x.cast<Scalar>()).template cast<double>().eval();
+                              },
+                              setup.output.grid};
   const auto started = std::chrono::steady_clock::now();
   bool finished;
   {
@@ -185,6 +190,7 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
     callbacks.stop_requested = [] { return g_signal.load() != 0; };
     callbacks.progress = [&printer](const Progress& p) { printer(p); };
     callbacks.stage_error = [&] {
+      if (const std::optional<double> error = setup.problem->reported_error(context)) return *error;
       return setup.problem->has_exact()
                  ? grid_error(*setup.problem, evaluator(field), setup.output).rel_l2
                  : std::numeric_limits<double>::quiet_NaN();
@@ -198,10 +204,6 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
 
   const GridMetrics grid = write_grid_outputs(*setup.problem, evaluator(field), setup.output);
   std::vector<std::pair<std::string, double>> extra;
-  OutputContext context{dir, [&field](const Eigen::MatrixXd& x) {
-                          return field.values(x.cast<Scalar>()).template cast<double>().eval();
-                        },
-                        setup.output.grid};
   setup.problem->write_outputs(context, extra);
 
   nlohmann::ordered_json metrics;
@@ -219,7 +221,8 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
   }
   metrics["loss"] = loss;
   metrics["stage_losses"] = trainer.stage_losses();
-  // Per finished stage: optimizer, final loss, rel_l2 on the output grid, wall seconds.
+  // Per finished stage: optimizer, final loss, rel_l2 (the problem's reported error, else the
+  // grid's), wall seconds.
   metrics["stages"] = nlohmann::ordered_json::array();
   for (size_t k = 0; k < trainer.stage_losses().size(); ++k) {
     nlohmann::ordered_json stage;
