@@ -52,7 +52,8 @@
 // (solution.vti: "tau"), has_exact() is false so that the grid does not compare τ, whose
 // exact value T/T₀ − 1 vanishes in a constant medium, and write_outputs writes rel_l2 and
 // max_abs_err of the travel time u = T₀ (1 + τ) instead, and travel_time.vti with
-// travel_time, exact_travel_time, error_travel_time and exact_tau.
+// travel_time, exact_travel_time, error_travel_time and exact_tau; reported_error gives the
+// same rel_l2 after every training stage (metrics.json `stages`).
 //
 // Exact solutions (error metrics):
 //   constant speed   u = |x − x₀|/v.
@@ -73,6 +74,7 @@
 #include <cstdio>
 #include <limits>
 #include <numbers>
+#include <optional>
 
 #include "io/grid.h"
 #include "io/vtk_image.h"
@@ -357,33 +359,54 @@ class Eikonal final : public Problem {
     return tau;
   }
 
+  std::optional<double> reported_error(const OutputContext& context) const override {
+    if (!factored_ || !known_travel_time()) return std::nullopt;
+    return travel_time_on_grid(context).rel_l2;
+  }
+
   void write_outputs(const OutputContext& context,
                      std::vector<std::pair<std::string, double>>& metrics) const override {
     if (!factored_ || !known_travel_time()) return;
-    const int d = domain_.space_dim();
-    const io::Grid grid = io::make_grid(domain_.lower(), domain_.upper(), context.grid);
-    const Eigen::MatrixXd x = grid.points(d);
-    const Eigen::VectorXd tau = context.values(x).col(0);
-    Eigen::VectorXd u(x.rows());
-    for (Eigen::Index p = 0; p < x.rows(); ++p)
-      u(p) = (x.row(p).transpose() - x0_).norm() / v0_ * (1 + tau(p));
-    const Eigen::VectorXd t = travel_time(x);
-    const Eigen::VectorXd error = u - t;
-    const double norm = t.norm();
-    const double rel_l2 = norm > 0 ? error.norm() / norm : error.norm();
-    const double max_abs = error.cwiseAbs().maxCoeff();
-    metrics.emplace_back("rel_l2", rel_l2);
-    metrics.emplace_back("max_abs_err", max_abs);
-    std::printf("travel time u = T0 (1 + tau): rel_l2 %.3e, max_abs_err %.3e\n", rel_l2, max_abs);
+    const TravelTimeOnGrid result = travel_time_on_grid(context);
+    metrics.emplace_back("rel_l2", result.rel_l2);
+    metrics.emplace_back("max_abs_err", result.max_abs_err);
+    std::printf("travel time u = T0 (1 + tau): rel_l2 %.3e, max_abs_err %.3e\n", result.rel_l2,
+                result.max_abs_err);
     io::PointArrays arrays;
-    arrays["travel_time"] = u;
-    arrays["exact_travel_time"] = t;
-    arrays["error_travel_time"] = error;
-    arrays["exact_tau"] = exact(x);
-    io::write_vti(context.dir / "travel_time.vti", grid, arrays);
+    arrays["travel_time"] = result.u;
+    arrays["exact_travel_time"] = result.exact;
+    arrays["error_travel_time"] = result.u - result.exact;
+    arrays["exact_tau"] = exact(result.x);
+    io::write_vti(context.dir / "travel_time.vti", result.grid, arrays);
   }
 
  private:
+  // The factored run's travel time u = T₀ (1 + τ) against the exact one on the output grid.
+  struct TravelTimeOnGrid {
+    io::Grid grid;
+    Eigen::MatrixXd x;
+    Eigen::VectorXd u, exact;
+    double rel_l2 = 0, max_abs_err = 0;
+  };
+
+  // One function for the per-stage error and the final metrics, so that they agree.
+  TravelTimeOnGrid travel_time_on_grid(const OutputContext& context) const {
+    const int d = domain_.space_dim();
+    TravelTimeOnGrid result;
+    result.grid = io::make_grid(domain_.lower(), domain_.upper(), context.grid);
+    result.x = result.grid.points(d);
+    const Eigen::VectorXd tau = context.values(result.x).col(0);
+    result.u.resize(result.x.rows());
+    for (Eigen::Index p = 0; p < result.x.rows(); ++p)
+      result.u(p) = (result.x.row(p).transpose() - x0_).norm() / v0_ * (1 + tau(p));
+    result.exact = travel_time(result.x);
+    const Eigen::VectorXd error = result.u - result.exact;
+    const double norm = result.exact.norm();
+    result.rel_l2 = norm > 0 ? error.norm() / norm : error.norm();
+    result.max_abs_err = error.cwiseAbs().maxCoeff();
+    return result;
+  }
+
   // The length of the domain's diagonal.
   double diameter() const {
     double d2 = 0;

@@ -7,7 +7,9 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -44,6 +46,13 @@ class Problem {
   virtual Eigen::MatrixXd exact(const Eigen::MatrixXd& x) const;
   // Which evaluation points count in error metrics (e.g. outside an absorbing layer).
   virtual Eigen::Array<bool, Eigen::Dynamic, 1> error_mask(const Eigen::MatrixXd& x) const;
+
+  // The rel. L2 error of the quantity the problem reports, on the output grid, from the
+  // trained field's values; nullopt: that error is the grid's comparison of the network
+  // output with exact() (or there is none). For problems whose network output is not the
+  // reported quantity (the factored Eikonal gives τ, the error is the travel time's). Called
+  // after every training stage; write_outputs reports the same number after the last.
+  virtual std::optional<double> reported_error(const OutputContext&) const { return std::nullopt; }
 
   // Extra metrics (added to metrics.json) and files after training.
   virtual void write_outputs(const OutputContext& context, std::vector<std::pair<std::string, double>>& metrics) const;

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <optional>
 #include <nlohmann/json.hpp>
 
 #include "fields/field_config.h"
@@ -177,6 +178,12 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
     std::ofstream(p) << config_text << "\n";
   });
 
+  const auto ansatz = setup.problem->ansatz();  // hard conditions: outputs see u, not N
+  const OutputContext context{dir, [&field, ansatz](const Eigen::MatrixXd& x) {
+                                Eigen::MatrixXd n = field.values(x.cast<Scalar>()).template cast<double>();
+                                return ansatz ? ansatz->values(x, n) : n;
+                              },
+                              setup.output.grid};
   const auto started = std::chrono::steady_clock::now();
   bool finished;
   {
@@ -186,9 +193,9 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
     callbacks.stop_requested = [] { return g_signal.load() != 0; };
     callbacks.progress = [&printer](const Progress& p) { printer(p); };
     callbacks.stage_error = [&] {
+      if (const std::optional<double> error = setup.problem->reported_error(context)) return *error;
       return setup.problem->has_exact()
-                 ? grid_error(*setup.problem, with_ansatz(evaluator(field), setup.problem->ansatz()),
-                              setup.output).rel_l2
+                 ? grid_error(*setup.problem, with_ansatz(evaluator(field), ansatz), setup.output).rel_l2
                  : std::numeric_limits<double>::quiet_NaN();
     };
     callbacks.checkpoint = [&] { write_checkpoint(dir / "checkpoint.h5", field, trainer, config_text, config_dir); };
@@ -198,15 +205,9 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
   if (!finished) std::printf("\ninterrupted at step %ld: writing the checkpoint and outputs\n", trainer.step());
   write_checkpoint(dir / "checkpoint.h5", field, trainer, config_text, config_dir);
 
-  const auto ansatz = setup.problem->ansatz();  // hard conditions: outputs see u, not N
   const GridMetrics grid =
       write_grid_outputs(*setup.problem, with_ansatz(evaluator(field), ansatz), setup.output);
   std::vector<std::pair<std::string, double>> extra;
-  OutputContext context{dir, [&field, ansatz](const Eigen::MatrixXd& x) {
-                          Eigen::MatrixXd n = field.values(x.cast<Scalar>()).template cast<double>();
-                          return ansatz ? ansatz->values(x, n) : n;
-                        },
-                        setup.output.grid};
   setup.problem->write_outputs(context, extra);
 
   nlohmann::ordered_json metrics;
@@ -224,7 +225,8 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
   }
   metrics["loss"] = loss;
   metrics["stage_losses"] = trainer.stage_losses();
-  // Per finished stage: optimizer, final loss, rel_l2 on the output grid, wall seconds.
+  // Per finished stage: optimizer, final loss, rel_l2 (the problem's reported error, else the
+  // grid's), wall seconds.
   metrics["stages"] = nlohmann::ordered_json::array();
   for (size_t k = 0; k < trainer.stage_losses().size(); ++k) {
     nlohmann::ordered_json stage;

@@ -4,8 +4,11 @@
 // adjoint of its evaluate (central differences, plain and factored, 2D and 3D); the exact
 // first-arrival time of the two-layer medium equals a brute-force search over interface
 // crossing points (direct, head and refracted waves) and satisfies |∇T| = 1/v; a short
-// factored run learns the constant-speed cone.
+// factored run learns the constant-speed cone; the per-stage error of a factored run is the
+// travel time's, the same as the final one after the last stage.
 #include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
 
 #include <cmath>
 #include <cstdio>
@@ -366,6 +369,46 @@ output: {grid: [32, 32], png: false}
   std::printf("tiny factored eikonal run: travel time rel_l2 %.3e\n", rel_l2);
   EXPECT_LT(rel_l2, 5e-2);
   EXPECT_TRUE(std::filesystem::exists(out / "travel_time.vti"));
+  std::filesystem::remove_all(out);
+}
+
+// The factored network gives τ, so the grid does not compare it; the per-stage rel_l2 must
+// still be the travel time's, after Adam and after LM, and the last one the final metric.
+TEST(Eikonal, FactoredStageErrorsAreTheTravelTimeError) {
+  const std::filesystem::path out = std::filesystem::temp_directory_path() / "nfield_eikonal_test" / "stages_out";
+  std::filesystem::remove_all(out);
+  RunSetup setup = load_run(write_config("stages", R"(
+problem: eikonal
+domain: {lower: [0, 0], upper: [1, 1]}
+equation:
+  source: [0.5, 0.25]
+  layers: {axis: y, interface: 0.5, speeds: [1, 2]}
+  factored: true
+field: {type: mlp, hidden: [8], activation: tanh}
+training:
+  seed: 2
+  precision: double
+  threads: 1
+  batch: {interior: 128, boundary: 32, source: 1}
+  stages:
+    - {optimizer: adam, steps: 30, lr: 1.0e-2}
+    - {optimizer: lm, steps: 5}
+output: {grid: [17, 17], png: false}
+)"), {}, out);
+  ASSERT_EQ(execute_run(setup), 0);
+  std::ifstream file(out / "metrics.json");
+  const nlohmann::json metrics = nlohmann::json::parse(file);
+  ASSERT_TRUE(metrics.contains("rel_l2")) << metrics.dump(2);
+  const nlohmann::json& stages = metrics["stages"];
+  ASSERT_EQ(stages.size(), 2u) << metrics.dump(2);
+  for (const auto& stage : stages) {
+    ASSERT_TRUE(stage.contains("rel_l2")) << metrics.dump(2);
+    EXPECT_TRUE(std::isfinite(stage["rel_l2"].get<double>()));
+    EXPECT_GT(stage["rel_l2"].get<double>(), 0);
+  }
+  // LM moved the field, so the two errors differ: the first is not the final one reused.
+  EXPECT_NE(stages[0]["rel_l2"].get<double>(), stages[1]["rel_l2"].get<double>());
+  EXPECT_EQ(stages[1]["rel_l2"].get<double>(), metrics["rel_l2"].get<double>());
   std::filesystem::remove_all(out);
 }
 
