@@ -9,6 +9,7 @@
 //                    problems: solution.pvd over frames frame_KKKK.vti)
 //   solution.png     preview of u (2D, or the middle slice of 3D / the first frame)
 //   metrics.json     problem, steps, wall_s, step_ms_median, losses, rel_l2, max_abs_err, …
+//                    stages: [{optimizer, steps, loss, rel_l2, wall_s}] after each stage
 //
 // The `output:` section:
 //   output:
