@@ -85,6 +85,27 @@ typename Sequential<Scalar>::Workspace& Sequential<Scalar>::workspace(int thread
   return *workspaces_[thread];
 }
 
+template <typename Scalar>
+void Sequential<Scalar>::prepare_workspaces(int threads) const {
+  if (static_cast<int>(workspaces_.size()) < threads) workspaces_.resize(threads);
+  for (auto& w : workspaces_) {
+    if (!w) w = std::make_unique<Workspace>();
+    w->activations.resize(modules_.size() + 1);
+    w->saved.resize(modules_.size());
+  }
+}
+
+template <typename Scalar>
+void Sequential<Scalar>::forward_block(const Scalar* params, const StreamLayout& layout,
+                                       const Eigen::Ref<const Matrix<Scalar>>& x,
+                                       Eigen::Index first, Eigen::Index rows, Workspace& ws,
+                                       bool record) const {
+  seed_input_streams<Scalar>(layout, x.middleRows(first, rows), ws.activations[0]);
+  for (size_t l = 0; l < modules_.size(); ++l)
+    modules_[l]->forward(layout, params + offsets_[l], ws.activations[l], ws.activations[l + 1],
+                         record ? &ws.saved[l] : nullptr);
+}
+
 namespace {
 int thread_count(int requested) { return requested > 0 ? requested : omp_get_max_threads(); }
 
@@ -111,14 +132,12 @@ void Sequential<Scalar>::evaluate(const Scalar* params, const StreamLayout& layo
   const int threads = thread_count(options_.threads);
   out.resize(n, layout.count(), output_width());
   const SingleThreadedEigen single_threaded_products;
-  if (static_cast<int>(workspaces_.size()) < threads) workspaces_.resize(threads);
-  for (auto& w : workspaces_)
-    if (!w) w = std::make_unique<Workspace>();
+  prepare_workspaces(threads);
 #pragma omp parallel for schedule(static) num_threads(threads)
   for (Eigen::Index b = 0; b < blocks; ++b) {
     Workspace& ws = workspace(omp_get_thread_num());
     const Eigen::Index first = b * block, rows = std::min(block, n - first);
-    ws.activations.resize(2);
+    // Two activations alternate: no tape is kept.
     seed_input_streams<Scalar>(layout, x.middleRows(first, rows), ws.activations[0]);
     for (size_t l = 0; l < modules_.size(); ++l) {
       modules_[l]->forward(layout, params + offsets_[l], ws.activations[0], ws.activations[1],
@@ -141,24 +160,18 @@ double Sequential<Scalar>::value_and_gradient(const Scalar* params, const Stream
   const int threads = thread_count(options_.threads);
   const size_t depth = modules_.size();
   const SingleThreadedEigen single_threaded_products;
-  if (static_cast<int>(workspaces_.size()) < threads) workspaces_.resize(threads);
+  prepare_workspaces(threads);
   for (auto& w : workspaces_) {
-    if (!w) w = std::make_unique<Workspace>();
     w->gradient.setZero(parameter_count_);
     w->loss = 0;
   }
 #pragma omp parallel num_threads(threads)
   {
     Workspace& ws = workspace(omp_get_thread_num());
-    ws.activations.resize(depth + 1);
-    ws.saved.resize(depth);
 #pragma omp for schedule(static)
     for (Eigen::Index b = 0; b < blocks; ++b) {
       const Eigen::Index first = b * block, rows = std::min(block, n - first);
-      seed_input_streams<Scalar>(layout, x.middleRows(first, rows), ws.activations[0]);
-      for (size_t l = 0; l < depth; ++l)
-        modules_[l]->forward(layout, params + offsets_[l], ws.activations[l],
-                             ws.activations[l + 1], &ws.saved[l]);
+      forward_block(params, layout, x, first, rows, ws, true);
       const Streams<Scalar>& out = ws.activations[depth];
       ws.adjoint.resize(out.points, out.count, out.width());
       ws.adjoint.data.setZero();
@@ -198,21 +211,14 @@ void Sequential<Scalar>::residuals_and_jacobian(const Scalar* params, const Stre
         throw std::logic_error("Sequential::residuals_and_jacobian: module '" + m->name() +
                                "' has no per-point parameter gradients");
   const SingleThreadedEigen single_threaded_products;
-  if (static_cast<int>(workspaces_.size()) < threads) workspaces_.resize(threads);
-  for (auto& w : workspaces_)
-    if (!w) w = std::make_unique<Workspace>();
+  prepare_workspaces(threads);
 #pragma omp parallel num_threads(threads)
   {
     Workspace& ws = workspace(omp_get_thread_num());
-    ws.activations.resize(depth + 1);
-    ws.saved.resize(depth);
 #pragma omp for schedule(static)
     for (Eigen::Index b = 0; b < blocks; ++b) {
       const Eigen::Index first = b * block, rows = std::min(block, n - first);
-      seed_input_streams<Scalar>(layout, x.middleRows(first, rows), ws.activations[0]);
-      for (size_t l = 0; l < depth; ++l)
-        modules_[l]->forward(layout, params + offsets_[l], ws.activations[l],
-                             ws.activations[l + 1], record ? &ws.saved[l] : nullptr);
+      forward_block(params, layout, x, first, rows, ws, record);
       const Streams<Scalar>& out = ws.activations[depth];
       residual.evaluate(first, layout, out, ws.r);
       // r is points × C column-major; the output is point-major, i.e. rᵀ column-major.

@@ -81,6 +81,13 @@ class Sequential {
  private:
   struct Workspace;
   Workspace& workspace(int thread) const;
+  // Workspaces for `threads` threads, each with room for a recording pass.
+  void prepare_workspaces(int threads) const;
+  // Forward pass of points [first, first + rows) of x into ws.activations (input, then
+  // each module's output), keeping each module's tape in ws.saved when `record`.
+  void forward_block(const Scalar* params, const StreamLayout& layout,
+                     const Eigen::Ref<const Matrix<Scalar>>& x, Eigen::Index first,
+                     Eigen::Index rows, Workspace& ws, bool record) const;
 
   SequentialOptions options_;
   std::vector<std::unique_ptr<Module<Scalar>>> modules_;

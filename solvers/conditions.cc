@@ -36,9 +36,7 @@ Eigen::MatrixXd evaluate_channels(const std::vector<io::Expression>& expressions
   return out;
 }
 
-namespace {
-
-std::vector<Face> faces_of(const io::ConfigNode& item, const Domain& domain) {
+std::vector<Face> condition_faces(const io::ConfigNode& item, const Domain& domain) {
   std::vector<std::string> names;
   if (item.yaml()["on"].IsSequence())
     names = item.get<std::vector<std::string>>("on");
@@ -60,6 +58,8 @@ std::vector<Face> faces_of(const io::ConfigNode& item, const Domain& domain) {
   }
   return faces;
 }
+
+namespace {
 
 LinearResidual value_residual(const Eigen::MatrixXd& target) {
   std::vector<LinearResidual::Term> terms;
@@ -117,7 +117,7 @@ std::vector<LossTerm> condition_terms(const io::ConfigNode& conditions, const Do
       }
     } else {
       const std::string type = item.get_choice("type", {"dirichlet", "neumann"});
-      const std::vector<Face> faces = faces_of(item, domain);
+      const std::vector<Face> faces = condition_faces(item, domain);
       term.batch_key = "boundary";
       term.sample = [&domain, faces](Random& rng, Eigen::Index n) {
         return domain.sample_faces(faces, rng, n);

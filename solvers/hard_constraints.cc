@@ -337,27 +337,6 @@ NetworkStreams with_ansatz(NetworkStreams network, std::shared_ptr<const Ansatz>
 
 namespace {
 
-std::vector<Face> hard_faces(const io::ConfigNode& item, const Domain& domain) {
-  std::vector<std::string> names;
-  if (item.yaml()["on"].IsSequence())
-    names = item.get<std::vector<std::string>>("on");
-  else
-    names = {item.get<std::string>("on")};
-  std::vector<Face> faces;
-  for (const std::string& name : names) {
-    if (Registry<int>::lower(name) == "boundary") {
-      for (const Face& f : domain.faces()) faces.push_back(f);
-      continue;
-    }
-    try {
-      faces.push_back(domain.face(name));
-    } catch (const UnknownNameError& e) {
-      throw item.error("on", std::string(e.what()) + ", or boundary, initial");
-    }
-  }
-  return faces;
-}
-
 std::vector<std::string> texts(const std::vector<io::Expression>& e) {
   std::vector<std::string> out;
   for (const auto& x : e) out.push_back(x.text());
@@ -410,7 +389,7 @@ std::shared_ptr<const Ansatz> read_ansatz(const io::ConfigNode& conditions, cons
         throw item.error("enforce",
                          "a Neumann condition cannot be hard (only dirichlet and initial "
                          "value/velocity can); use enforce: soft");
-      const std::vector<Face> faces = hard_faces(item, domain);
+      const std::vector<Face> faces = condition_faces(item, domain);
       if (!dirichlet) {
         dirichlet = Ansatz::Dirichlet{{}, values};
         dirichlet_item = item;

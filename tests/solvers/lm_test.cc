@@ -15,25 +15,12 @@
 #include "io/config.h"
 #include "solvers/run.h"
 #include "solvers/trainer.h"
+#include "tests/testing/scratch.h"
 
 namespace nfield::solvers {
 namespace {
 
-std::filesystem::path scratch_dir() {
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  std::string name = std::string(info->test_suite_name()) + "." + info->name();
-  std::replace(name.begin(), name.end(), '/', '_');
-  const auto dir = std::filesystem::path(NFIELD_BINARY_DIR) / "test_scratch" / "lm" / name;
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
-  return dir;
-}
-
-std::filesystem::path write_config(const std::string& text) {
-  const auto path = scratch_dir() / "config.yaml";
-  std::ofstream(path) << text;
-  return path;
-}
+std::filesystem::path write_config(const std::string& text) { return testutil::write_config("lm", text); }
 
 // −Δu = 2π² sin(πx) sin(πy) on [0, 1]², u = 0 on the boundary; written as Δu = f.
 std::string poisson_config(const std::string& field, const std::string& batch,
