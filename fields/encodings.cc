@@ -19,6 +19,7 @@ const Registry<int>& encodings() {
     r.add("identity", 0);
     r.add("positional", 1);
     r.add("fourier", 2);
+    r.add("cusp", 3);
     return r;
   }();
   return registry;
@@ -30,6 +31,21 @@ double normal(std::mt19937_64& rng) {
   const double u2 = static_cast<double>(rng() >> 11) * 0x1.0p-53;
   return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * std::numbers::pi * u2);
 }
+
+// |z|, with derivative sign(z) (0 at z = 0) and no higher ones.
+template <typename Scalar>
+class Abs final : public autodiff::ElementwiseFunction<Scalar> {
+ public:
+  void derivatives(const Eigen::Ref<const autodiff::Matrix<Scalar>>& z, int max_order,
+                   std::vector<autodiff::Matrix<Scalar>>& tables) const override {
+    tables.resize(max_order + 1);
+    for (auto& table : tables) table.resize(z.rows(), z.cols());
+    tables[0] = z.cwiseAbs();
+    if (max_order >= 1)
+      tables[1] = z.unaryExpr([](Scalar v) { return Scalar((v > 0) - (v < 0)); });
+    for (int m = 2; m <= max_order; ++m) tables[m].setZero();
+  }
+};
 
 }  // namespace
 
@@ -44,6 +60,14 @@ void EncodingOptions::validate() const {
                                 ": must be >= 1");
   if (kind == "fourier" && !(scale > 0))
     throw std::invalid_argument("encoding.scale = " + std::to_string(scale) + ": must be > 0");
+  if (kind == "cusp" && at.empty())
+    throw std::invalid_argument("encoding.at = []: needs at least one plane");
+  if (kind == "cusp")
+    for (double c : at)
+      if (!std::isfinite(c))
+        throw std::invalid_argument("encoding.at = " + std::to_string(c) + ": must be finite");
+  if (kind == "cusp" && axis < 0)
+    throw std::invalid_argument("encoding.axis = " + std::to_string(axis) + ": must be >= 0");
 }
 
 Eigen::MatrixXd encoding_matrix(const EncodingOptions& options, int input_dim) {
@@ -64,36 +88,45 @@ Eigen::MatrixXd encoding_matrix(const EncodingOptions& options, int input_dim) {
         b(r, c) = 2.0 * std::numbers::pi * options.scale * normal(rng);
     return b;
   }
+  if (kind == "cusp") {
+    if (options.axis >= input_dim)
+      throw std::invalid_argument("encoding.axis = " + std::to_string(options.axis) +
+                                  ": must be < the input dimension " + std::to_string(input_dim));
+    Eigen::MatrixXd b = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(options.at.size()), input_dim);
+    b.col(options.axis).setOnes();
+    return b;
+  }
   return Eigen::MatrixXd(0, input_dim);
 }
 
 std::vector<std::string> encoding_names() { return encodings().names(); }
 
 template <typename Scalar>
-SinusoidalEncoding<Scalar>::SinusoidalEncoding(Eigen::MatrixXd frequencies, bool include_input)
-    : frequencies_(std::move(frequencies)), include_input_(include_input) {
-  const Eigen::Index m = frequencies_.rows();
-  doubled_.resize(2 * m, frequencies_.cols());
-  doubled_ << frequencies_.cast<Scalar>(), frequencies_.cast<Scalar>();
-  phase_.resize(1, 2 * m);
-  phase_.leftCols(m).setZero();
-  phase_.rightCols(m).setConstant(static_cast<Scalar>(std::numbers::pi / 2));
+FeatureEncoding<Scalar>::FeatureEncoding(const Eigen::MatrixXd& weights,
+                                         const Eigen::VectorXd& offsets,
+                                         std::unique_ptr<autodiff::ElementwiseFunction<Scalar>> function,
+                                         bool include_input)
+    : weights_(weights.cast<Scalar>()),
+      offsets_(offsets.transpose().cast<Scalar>()),
+      function_(std::move(function)),
+      include_input_(include_input) {
+  if (offsets.size() != weights.rows())
+    throw std::logic_error("FeatureEncoding: one offset per row of the weights expected");
 }
 
 // saved = [z streams (one matrix), derivative tables …]
 template <typename Scalar>
-void SinusoidalEncoding<Scalar>::forward(const autodiff::StreamLayout& layout, const Scalar*,
-                                         const autodiff::Streams<Scalar>& in,
-                                         autodiff::Streams<Scalar>& out,
-                                         autodiff::SavedTensors<Scalar>* saved) const {
+void FeatureEncoding<Scalar>::forward(const autodiff::StreamLayout& layout, const Scalar*,
+                                      const autodiff::Streams<Scalar>& in,
+                                      autodiff::Streams<Scalar>& out,
+                                      autodiff::SavedTensors<Scalar>* saved) const {
   thread_local autodiff::Streams<Scalar> z, y;
   thread_local std::vector<autodiff::Matrix<Scalar>> tables;
-  static const auto sine = make_activation<Scalar>({"sine", 1.0});
-  z.resize(in.points, in.count, doubled_.rows());
-  z.data.noalias() = in.data * doubled_.transpose();
-  z.stream(0).rowwise() += phase_.row(0);
+  z.resize(in.points, in.count, weights_.rows());
+  z.data.noalias() = in.data * weights_.transpose();
+  z.stream(0).rowwise() += offsets_.row(0);
   const int order = layout.forward_order() + (saved ? 1 : 0);
-  sine->derivatives(z.stream(0), order, tables);
+  function_->derivatives(z.stream(0), order, tables);
   autodiff::elementwise_forward(layout, tables, z, y);
   const Eigen::Index d = include_input_ ? in.width() : 0;
   out.resize(in.points, in.count, d + y.width());
@@ -107,11 +140,11 @@ void SinusoidalEncoding<Scalar>::forward(const autodiff::StreamLayout& layout, c
 }
 
 template <typename Scalar>
-void SinusoidalEncoding<Scalar>::backward(const autodiff::StreamLayout& layout, const Scalar*,
-                                          const autodiff::Streams<Scalar>& in,
-                                          const autodiff::SavedTensors<Scalar>& saved,
-                                          autodiff::Streams<Scalar>& out_adjoint, Scalar*,
-                                          autodiff::Streams<Scalar>* in_adjoint) const {
+void FeatureEncoding<Scalar>::backward(const autodiff::StreamLayout& layout, const Scalar*,
+                                       const autodiff::Streams<Scalar>& in,
+                                       const autodiff::SavedTensors<Scalar>& saved,
+                                       autodiff::Streams<Scalar>& out_adjoint, Scalar*,
+                                       autodiff::Streams<Scalar>* in_adjoint) const {
   if (!in_adjoint) return;
   thread_local autodiff::Streams<Scalar> z, y_adjoint, z_adjoint;
   thread_local std::vector<autodiff::Matrix<Scalar>> tables;
@@ -120,15 +153,37 @@ void SinusoidalEncoding<Scalar>::backward(const autodiff::StreamLayout& layout, 
   z.data = saved[0];
   tables.assign(saved.begin() + 1, saved.end());
   const Eigen::Index d = include_input_ ? in.width() : 0;
-  y_adjoint.resize(in.points, in.count, doubled_.rows());
-  y_adjoint.data = out_adjoint.data.rightCols(doubled_.rows());
+  y_adjoint.resize(in.points, in.count, weights_.rows());
+  y_adjoint.data = out_adjoint.data.rightCols(weights_.rows());
   autodiff::elementwise_backward(layout, tables, z, y_adjoint, z_adjoint);
   in_adjoint->resize(in.points, in.count, in.width());
-  in_adjoint->data.noalias() = z_adjoint.data * doubled_;
+  in_adjoint->data.noalias() = z_adjoint.data * weights_;
   if (d > 0) in_adjoint->data += out_adjoint.data.leftCols(d);
 }
 
-template class SinusoidalEncoding<float>;
-template class SinusoidalEncoding<double>;
+template <typename Scalar>
+std::unique_ptr<autodiff::Module<Scalar>> make_encoding(const EncodingOptions& options,
+                                                        int input_dim) {
+  const Eigen::MatrixXd b = encoding_matrix(options, input_dim);
+  const std::string kind = Registry<int>::lower(options.type);
+  if (kind == "identity") return nullptr;
+  if (kind == "cusp")
+    return std::make_unique<FeatureEncoding<Scalar>>(
+        b, -Eigen::Map<const Eigen::VectorXd>(options.at.data(), b.rows()),
+        std::make_unique<Abs<Scalar>>(), true);
+  const Eigen::Index m = b.rows();
+  Eigen::MatrixXd doubled(2 * m, input_dim);
+  doubled << b, b;
+  Eigen::VectorXd phase(2 * m);
+  phase << Eigen::VectorXd::Zero(m), Eigen::VectorXd::Constant(m, std::numbers::pi / 2);
+  return std::make_unique<FeatureEncoding<Scalar>>(
+      doubled, phase, make_activation<Scalar>({"sine", 1.0}),
+      kind == "positional" && options.include_input);
+}
+
+template class FeatureEncoding<float>;
+template class FeatureEncoding<double>;
+template std::unique_ptr<autodiff::Module<float>> make_encoding<float>(const EncodingOptions&, int);
+template std::unique_ptr<autodiff::Module<double>> make_encoding<double>(const EncodingOptions&, int);
 
 }  // namespace nfield::fields

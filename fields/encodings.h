@@ -1,13 +1,28 @@
 // SPDX-License-Identifier: MIT
 //
-// Input encodings γ(x). Both sinusoidal encodings are a fixed linear map followed by sine
-// and cosine, so they reuse the elementwise stream rules (cos z = sin(z + π/2)):
+// Input encodings γ(x). Each is a fixed affine map z = W x + b followed by an elementwise
+// function, so it reuses the elementwise stream rules of autodiff/elementwise.h:
 //
 //   positional  γ(x) = [x, sin(B x), cos(B x)], B = rows 2ˡ π eᵢ, l < L (NeRF; Mildenhall 2020)
 //   fourier     γ(x) = [sin(2π B x), cos(2π B x)], B ~ N(0, σ²), m × d (Tancik et al. 2020)
+//   cusp        γ(x) = [x, |x_a − c₁|, …, |x_a − c_k|] for planes x_a = c_k
 //   identity    γ(x) = x (no module)
 //
-// The matrix B is part of the field and saved with it; it is not trained.
+// Sinusoids use sin only (cos z = sin(z + π/2)): W = [B; B], b = [0; π/2].
+//
+// Cusp features (Tseng, Lin, Hu and Lai 2023, cusp-capturing PINNs) let a smooth network
+// represent a function that is continuous across a plane but whose normal derivative jumps
+// there, as travel times in a layered medium or potentials across a material interface do.
+// With f₋, f₊ smooth on either side and equal on the plane, f₊ − f₋ = (x_a − c) h, so
+//   f = (f₊ + f₋)/2 + |x_a − c| h/2,
+// a smooth function of [x, |x_a − c|]. A network of x alone has to round the kink off over
+// a width that only shrinks with the network's size.
+// Pitfall: |·| has derivative sign(z) (0 on the plane) and no higher ones in the streams; the
+// δ of the second derivative on the plane is not there. Residuals of first order (eikonal)
+// are exact on both sides; a second-order residual must not be asked across the plane.
+//
+// The matrix B (or the rows e_a of a cusp encoding) is part of the field and saved with it;
+// it is not trained.
 #pragma once
 
 #include <cstdint>
@@ -15,37 +30,48 @@
 #include <string>
 #include <vector>
 
+#include "autodiff/elementwise.h"
 #include "autodiff/module.h"
 
 namespace nfield::fields {
 
 struct EncodingOptions {
-  std::string type = "identity";  // identity | positional | fourier
+  std::string type = "identity";  // identity | positional | fourier | cusp
   int frequencies = 6;            // positional: L, frequencies 2⁰π … 2^(L−1)π per axis
   bool include_input = true;      // positional: keep x itself in γ(x)
   int features = 128;             // fourier: m
   double scale = 10.0;            // fourier: σ
   std::uint64_t seed = 0;         // fourier: draws B
+  int axis = 0;                   // cusp: the input a normal to the planes
+  std::vector<double> at;         // cusp: the planes x_a = c, at least one
 
   // Throws std::invalid_argument naming the field, its value and the rule.
   void validate() const;
 };
 
-// Rows of B (with the 2π of Fourier features folded in) for an input of dimension d.
+// The linear part W of γ for an input of dimension d: B for positional and Fourier (the 2π
+// of Fourier features folded in; W = [B; B] in the module), the rows e_a for cusp, nothing
+// for identity.
 Eigen::MatrixXd encoding_matrix(const EncodingOptions& options, int input_dim);
 
+// The encoding module for inputs of dimension d; nullptr for the identity.
 template <typename Scalar>
-class SinusoidalEncoding final : public autodiff::Module<Scalar> {
- public:
-  // frequencies: m × d; output = [x if include_input, sin(x Bᵀ), cos(x Bᵀ)].
-  SinusoidalEncoding(Eigen::MatrixXd frequencies, bool include_input);
+std::unique_ptr<autodiff::Module<Scalar>> make_encoding(const EncodingOptions& options,
+                                                        int input_dim);
 
-  std::string name() const override { return "sinusoidal encoding"; }
-  Eigen::Index input_width() const override { return frequencies_.cols(); }
+// γ(x) = [x if include_input, σ(x Wᵀ + b)] with a fixed W (m × d), b (m) and σ.
+template <typename Scalar>
+class FeatureEncoding final : public autodiff::Module<Scalar> {
+ public:
+  FeatureEncoding(const Eigen::MatrixXd& weights, const Eigen::VectorXd& offsets,
+                  std::unique_ptr<autodiff::ElementwiseFunction<Scalar>> function,
+                  bool include_input);
+
+  std::string name() const override { return "feature encoding"; }
+  Eigen::Index input_width() const override { return weights_.cols(); }
   Eigen::Index output_width() const override {
-    return (include_input_ ? frequencies_.cols() : 0) + 2 * frequencies_.rows();
+    return (include_input_ ? weights_.cols() : 0) + weights_.rows();
   }
-  const Eigen::MatrixXd& frequencies() const { return frequencies_; }
 
   void forward(const autodiff::StreamLayout& layout, const Scalar* params,
                const autodiff::Streams<Scalar>& in, autodiff::Streams<Scalar>& out,
@@ -56,9 +82,9 @@ class SinusoidalEncoding final : public autodiff::Module<Scalar> {
                 autodiff::Streams<Scalar>* in_adjoint) const override;
 
  private:
-  Eigen::MatrixXd frequencies_;
-  autodiff::Matrix<Scalar> doubled_;  // [B; B], 2m × d
-  autodiff::Matrix<Scalar> phase_;    // 1 × 2m: 0 for sines, π/2 for cosines
+  autodiff::Matrix<Scalar> weights_;  // m × d
+  autodiff::Matrix<Scalar> offsets_;  // 1 × m
+  std::shared_ptr<autodiff::ElementwiseFunction<Scalar>> function_;
   bool include_input_;
 };
 

@@ -55,6 +55,9 @@ void FieldOptions::validate() const {
   if (!(first_omega > 0)) reject("first_omega", std::to_string(first_omega), "must be > 0");
   if (!(hidden_omega > 0)) reject("hidden_omega", std::to_string(hidden_omega), "must be > 0");
   encoding.validate();
+  if (Registry<int>::lower(encoding.type) == "cusp" && encoding.axis >= input_dim)
+    reject("encoding.axis", std::to_string(encoding.axis),
+           "must be < input_dim = " + std::to_string(input_dim));
 }
 
 std::vector<std::string> field_type_names() { return field_types().names(); }
@@ -66,10 +69,7 @@ Field<Scalar>::Field(FieldOptions options, autodiff::SequentialOptions evaluatio
   const int d = options_.input_dim;
   encoding_matrix_ = fields::encoding_matrix(options_.encoding, d);
   Eigen::Index width = d;
-  if (encoding_matrix_.rows() > 0) {
-    const bool include = Registry<int>::lower(options_.encoding.type) == "positional" &&
-                         options_.encoding.include_input;
-    auto encoding = std::make_unique<SinusoidalEncoding<Scalar>>(encoding_matrix_, include);
+  if (auto encoding = make_encoding<Scalar>(options_.encoding, d)) {
     width = encoding->output_width();
     network_.add(std::move(encoding));
   }

@@ -1,12 +1,25 @@
 // SPDX-License-Identifier: MIT
 #include "fields/field_config.h"
 
+#include <algorithm>
+#include <cmath>
+
 #include "fields/activations.h"
 
 namespace nfield::fields {
 
+namespace {
+
+std::vector<std::string> names_or_default(std::vector<std::string> names, int input_dim) {
+  if (names.empty())
+    for (int a = 0; a < input_dim; ++a) names.push_back(std::string(1, "xyzw"[a % 4]));
+  return names;
+}
+
+}  // namespace
+
 FieldOptions field_options_from_config(const io::ConfigNode& node, int input_dim, int output_dim,
-                                       std::uint64_t seed) {
+                                       std::uint64_t seed, std::vector<std::string> input_names) {
   FieldOptions o;
   o.input_dim = input_dim;
   o.output_dim = output_dim;
@@ -33,6 +46,13 @@ FieldOptions field_options_from_config(const io::ConfigNode& node, int input_dim
       o.encoding.scale = e.get_or("scale", o.encoding.scale);
       e.require("scale", o.encoding.scale > 0, "expected a number > 0");
       o.encoding.seed = e.has("seed") ? static_cast<std::uint64_t>(e.get_nonnegative<std::int64_t>("seed")) : o.seed;
+    } else if (o.encoding.type == "cusp") {
+      const std::vector<std::string> axes = names_or_default(std::move(input_names), input_dim);
+      const std::string axis = e.get_choice("axis", axes);
+      o.encoding.axis = static_cast<int>(std::find(axes.begin(), axes.end(), axis) - axes.begin());
+      o.encoding.at = e.get<std::vector<double>>("at");
+      e.require("at", !o.encoding.at.empty(), "expected a non-empty list of plane positions");
+      for (double c : o.encoding.at) e.require("at", std::isfinite(c), "expected finite numbers");
     }
     e.reject_unknown_keys();
   }
@@ -45,7 +65,7 @@ FieldOptions field_options_from_config(const io::ConfigNode& node, int input_dim
   return o;
 }
 
-YAML::Node to_yaml(const FieldOptions& o) {
+YAML::Node to_yaml(const FieldOptions& o, std::vector<std::string> input_names) {
   YAML::Node n;
   n["type"] = o.type;
   n["hidden"] = o.hidden;
@@ -61,6 +81,9 @@ YAML::Node to_yaml(const FieldOptions& o) {
     n["encoding"]["features"] = o.encoding.features;
     n["encoding"]["scale"] = o.encoding.scale;
     n["encoding"]["seed"] = o.encoding.seed;
+  } else if (o.encoding.type == "cusp") {
+    n["encoding"]["axis"] = names_or_default(std::move(input_names), o.input_dim).at(o.encoding.axis);
+    n["encoding"]["at"] = o.encoding.at;
   }
   return n;
 }

@@ -9,7 +9,8 @@
 //     hidden_omega: 30        # siren (mlp with sine: its frequency)
 //     activation: tanh        # mlp: sine | tanh | softplus | relu | identity
 //     seed: 0                 # default: training.seed
-//     encoding: {type: fourier, features: 128, scale: 10}   # identity | positional | fourier
+//     encoding: {type: fourier, features: 128, scale: 10}   # identity | positional | fourier | cusp
+//     encoding: {type: cusp, axis: y, at: [0.5]}             # |y − 0.5| as an extra input
 #pragma once
 
 #include <yaml-cpp/yaml.h>
@@ -19,9 +20,10 @@
 
 namespace nfield::fields {
 
-// input_dim and output_dim come from the problem; `seed` is the default seed.
+// input_dim and output_dim come from the problem; `seed` is the default seed; input_names
+// name the inputs for `encoding.axis` (default x, y, z, w).
 FieldOptions field_options_from_config(const io::ConfigNode& node, int input_dim, int output_dim,
-                                       std::uint64_t seed);
-YAML::Node to_yaml(const FieldOptions& options);
+                                       std::uint64_t seed, std::vector<std::string> input_names = {});
+YAML::Node to_yaml(const FieldOptions& options, std::vector<std::string> input_names = {});
 
 }  // namespace nfield::fields

@@ -1,7 +1,10 @@
 // SPDX-License-Identifier: MIT
 #include "fields/field_io.h"
 
+#include <span>
 #include <type_traits>
+
+#include "io/registry.h"
 
 namespace nfield::fields {
 
@@ -25,6 +28,10 @@ void save_field(io::H5Writer& file, const Field<Scalar>& field, const std::strin
   file.write_attribute(group, "encoding_features", o.encoding.features);
   file.write_attribute(group, "encoding_scale", o.encoding.scale);
   file.write_attribute(group, "encoding_seed", static_cast<std::int64_t>(o.encoding.seed));
+  if (Registry<int>::lower(o.encoding.type) == "cusp") {
+    file.write_attribute(group, "encoding_axis", o.encoding.axis);
+    file.write_attribute(group, "encoding_at", std::span<const double>(o.encoding.at));
+  }
   if (field.encoding_matrix().rows() > 0) file.write(group + "/encoding", field.encoding_matrix());
   const auto& modules = field.network().modules();
   int layer = 0;
@@ -55,6 +62,10 @@ FieldOptions load_field_options(const io::H5Reader& file, const std::string& gro
   o.encoding.features = static_cast<int>(file.read_attribute<std::int64_t>(group, "encoding_features"));
   o.encoding.scale = file.read_attribute<double>(group, "encoding_scale");
   o.encoding.seed = static_cast<std::uint64_t>(file.read_attribute<std::int64_t>(group, "encoding_seed"));
+  if (file.has_attribute(group, "encoding_axis"))
+    o.encoding.axis = static_cast<int>(file.read_attribute<std::int64_t>(group, "encoding_axis"));
+  if (file.has_attribute(group, "encoding_at"))
+    o.encoding.at = file.read_attribute<std::vector<double>>(group, "encoding_at");
   return o;
 }
 

@@ -17,6 +17,8 @@
 //     source_fraction: 0.25         # of the "pde" points, drawn around the source (below)
 //     outflow_weight: 1             # weight of the "outflow" loss term (0: none)
 //     source_weight: 10             # weight of the "source" loss term (0: none)
+//     viscosity: 0                  # ε of the vanishing-viscosity term (below), or a list
+//                                   # with one ε per training stage
 //
 // Loss terms:
 //   "pde"     (batch `interior`) r = |∇u| − 1/v(x). The residual is not linear in the output
@@ -34,6 +36,20 @@
 //             in the two-layer example (factored) it brought rel_l2 from 0.25 to 0.02.
 //   "source"  (batch `source`) the source condition at x₀ itself; its n points are all x₀,
 //             so `source: 1` is enough. r = u(x₀) (plain), r = τ(x₀) (factored).
+//
+// Vanishing viscosity (`viscosity: ε`): the "pde" residual becomes r = |∇u| − 1/v − ε Δu.
+// |∇u| = 1/v at the collocation points also holds for fields with kinks of the wrong kind:
+// ridges across which u is convex, lines that "emit" waves earlier than the first arrival,
+// which a network rounds off between the points at little cost. On the two-layer example Adam
+// and LM found such a field for some seeds (rel_l2 3e-2, loss 1e-6 on fresh points). The first
+// arrival is the limit ε → 0 of the viscous equation (the viscosity solution of Crandall and
+// Lions): rounding a concave kink (two fronts meeting) gives Δu < 0 together with |∇u| < 1/v,
+// which the term balances, while rounding a convex one gives Δu > 0 and a residual that grows.
+// ε biases the result by about ε times the curvature, so it is meant to fall over the training
+// stages to 0 or nearly so: a list gives one ε per stage. Factored, the term is
+// ε (Δu − (1 + τ) ΔT₀) = ε (2 ∇T₀·∇τ + T₀ Δτ): the curvature ΔT₀ = (d − 1)/(v₀ |x − x₀|) of the
+// analytic factor is left out, as it would dominate the residual near the source, where there
+// is no branch to select.
 //
 // The solution is a cone at x₀ (u ≈ |x − x₀|/v₀), whose kink a smooth network rounds off.
 // With `factored: true` the travel time is factored as u = T₀ (1 + τ) with the analytic
@@ -73,6 +89,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <memory>
 #include <numbers>
 #include <optional>
 
@@ -132,19 +149,29 @@ double layered_travel_time(const Layers& m, const double* x0, const double* x, i
   return std::min(time(lo), time(hi));
 }
 
-// The eikonal residual r = |∇u| − s(x) with s = 1/v (`normals` empty), or the outflow
-// residual r = [min(0, ∇u·n), min(0, u)/L] on boundary points with outward normals n; u is
-// the network output (plain) or T₀ (1 + τ) (factored).
+// The residuals of the three loss terms on one point set; u is the network output (plain) or
+// T₀ (1 + τ) (factored):
+//   eikonal  r = |∇u| − s(x) − ε·(viscous term), s = 1/v
+//   outflow  r = [min(0, ∇u·n), min(0, u)/L] with outward normals n
+//   source   r = the output itself (u or τ) at x₀
 class EikonalResidual final : public Residual {
  public:
-  // slowness: one value per point of the set (eikonal); normals: one row per point
-  // (outflow), length: L; x0 and v0 are used when factored.
-  EikonalResidual(Eigen::MatrixXd points, Eigen::VectorXd slowness, Eigen::MatrixXd normals,
-                  double length, bool factored, Eigen::VectorXd x0, double v0)
-      : points_(std::move(points)), slowness_(std::move(slowness)), normals_(std::move(normals)),
-        length_(length), factored_(factored), x0_(std::move(x0)), v0_(v0) {}
+  enum class Kind { kEikonal, kOutflow, kSource };
+  struct Setup {
+    bool factored = false;
+    Eigen::VectorXd x0;
+    double v0 = 1;
+    double viscosity = 0;
+    double length = 1;  // L of the outflow term
+  };
 
-  int components() const override { return normals_.size() > 0 ? 2 : 1; }
+  // per_point: the slowness s (eikonal, one value per point) or the normals (outflow, one row
+  // per point); unused for the source.
+  EikonalResidual(Kind kind, Eigen::MatrixXd points, Eigen::MatrixXd per_point, Setup setup)
+      : kind_(kind), points_(std::move(points)), per_point_(std::move(per_point)),
+        setup_(std::move(setup)) {}
+
+  int components() const override { return kind_ == Kind::kOutflow ? 2 : 1; }
 
   void evaluate(Eigen::Index first, const StreamLayout& layout, const Streams<double>& out,
                 Eigen::MatrixXd& r) const override {
@@ -153,12 +180,18 @@ class EikonalResidual final : public Residual {
     r.resize(n, components());
     Eigen::VectorXd g(d), grad_t0(d);
     for (Eigen::Index p = 0; p < n; ++p) {
+      if (kind_ == Kind::kSource) {
+        r(p, 0) = out.stream(StreamLayout::value())(p, 0);
+        continue;
+      }
       const double t0 = gradient(first + p, p, layout, out, g, grad_t0);
-      if (normals_.size() > 0) {
-        r(p, 0) = std::min(0.0, normals_.row(first + p).dot(g));
-        r(p, 1) = std::min(0.0, value(t0, p, out)) / length_;
+      if (kind_ == Kind::kOutflow) {
+        r(p, 0) = std::min(0.0, per_point_.row(first + p).dot(g));
+        r(p, 1) = std::min(0.0, value(t0, p, out)) / setup_.length;
       } else {
-        r(p, 0) = g.norm() - slowness_(first + p);
+        r(p, 0) = g.norm() - per_point_(first + p, 0);
+        if (setup_.viscosity > 0)
+          r(p, 0) -= setup_.viscosity * laplacian(first + p, p, t0, layout, out);
       }
     }
   }
@@ -169,19 +202,26 @@ class EikonalResidual final : public Residual {
     const int d = static_cast<int>(points_.cols());
     Eigen::VectorXd g(d), grad_t0(d), g_bar(d);
     for (Eigen::Index p = 0; p < n; ++p) {
+      if (kind_ == Kind::kSource) {
+        adjoint.stream(StreamLayout::value())(p, 0) += r_bar(p, 0);
+        continue;
+      }
       const double t0 = gradient(first + p, p, layout, out, g, grad_t0);
-      if (normals_.size() > 0) {
+      if (kind_ == Kind::kOutflow) {
         if (value(t0, p, out) < 0)
-          adjoint.stream(StreamLayout::value())(p, 0) += r_bar(p, 1) * (factored_ ? t0 : 1.0) / length_;
-        const Eigen::VectorXd normal = normals_.row(first + p).transpose();
+          adjoint.stream(StreamLayout::value())(p, 0) +=
+              r_bar(p, 1) * (setup_.factored ? t0 : 1.0) / setup_.length;
+        const Eigen::VectorXd normal = per_point_.row(first + p).transpose();
         if (!(normal.dot(g) < 0)) continue;
         g_bar = r_bar(p, 0) * normal;
       } else {
+        if (setup_.viscosity > 0)
+          laplacian_backward(first + p, p, t0, -setup_.viscosity * r_bar(p, 0), layout, adjoint);
         const double norm = g.norm();
         if (!(norm > 1e-12)) continue;  // |g| is not differentiable at 0: subgradient 0
         g_bar = (r_bar(p, 0) / norm) * g;
       }
-      if (factored_) {
+      if (setup_.factored) {
         adjoint.stream(StreamLayout::value())(p, 0) += g_bar.dot(grad_t0);
         for (int a = 0; a < d; ++a) adjoint.stream(layout.tangent(a))(p, 0) += t0 * g_bar(a);
       } else {
@@ -191,24 +231,57 @@ class EikonalResidual final : public Residual {
   }
 
  private:
-  // u at row `row` of the streams, T₀ from gradient().
-  double value(double t0, Eigen::Index row, const Streams<double>& out) const {
-    const double v = out.stream(StreamLayout::value())(row, 0);
-    return factored_ ? t0 * (1 + v) : v;
+  // The viscous term's Laplacian at point `index` (row `row`); plain: Δu, the
+  // Laplacian stream; factored, with T₀ from gradient(): Δu − (1 + τ) ΔT₀ = 2 ∇T₀·∇τ + T₀ Δτ,
+  // without the curvature ΔT₀ = (d − 1)/(v₀ |x − x₀|) of the analytic factor (see the header).
+  double laplacian(Eigen::Index index, Eigen::Index row, double t0,
+                   const StreamLayout& layout, const Streams<double>& out) const {
+    const double lap = out.stream(layout.op(0))(row, 0);
+    if (!setup_.factored) return lap;
+    const int d = static_cast<int>(points_.cols());
+    const Eigen::VectorXd e = points_.row(index).transpose() - setup_.x0;
+    const double distance = e.norm();
+    if (!(distance > 0)) return 0;
+    double grad_dot = 0;
+    for (int a = 0; a < d; ++a)
+      grad_dot += e(a) / (distance * setup_.v0) * out.stream(layout.tangent(a))(row, 0);
+    return 2 * grad_dot + t0 * lap;
   }
 
-  // ∇u at point `index` of the set (row `row` of the streams); factored: also ∇T₀ and
-  // returns T₀ (∇T₀ = 0 at x₀ itself, where it is undefined); u = T₀ (1 + τ).
+  // Adds weight · ∂(viscous Laplacian)/∂(streams) to the adjoint streams.
+  void laplacian_backward(Eigen::Index index, Eigen::Index row, double t0, double weight,
+                          const StreamLayout& layout, Streams<double>& adjoint) const {
+    if (!setup_.factored) {
+      adjoint.stream(layout.op(0))(row, 0) += weight;
+      return;
+    }
+    const int d = static_cast<int>(points_.cols());
+    const Eigen::VectorXd e = points_.row(index).transpose() - setup_.x0;
+    const double distance = e.norm();
+    if (!(distance > 0)) return;
+    for (int a = 0; a < d; ++a)
+      adjoint.stream(layout.tangent(a))(row, 0) += weight * 2 * e(a) / (distance * setup_.v0);
+    adjoint.stream(layout.op(0))(row, 0) += weight * t0;
+  }
+
+  // u at row `row`, T₀ from gradient().
+  double value(double t0, Eigen::Index row, const Streams<double>& out) const {
+    const double v = out.stream(StreamLayout::value())(row, 0);
+    return setup_.factored ? t0 * (1 + v) : v;
+  }
+
+  // ∇u at point `index` of the set (row `row` of the streams); factored: also ∇T₀
+  // and returns T₀ (∇T₀ = 0 at x₀ itself, where it is undefined); u = T₀ (1 + τ).
   double gradient(Eigen::Index index, Eigen::Index row, const StreamLayout& layout,
                   const Streams<double>& out, Eigen::VectorXd& g, Eigen::VectorXd& grad_t0) const {
     const int d = static_cast<int>(points_.cols());
     for (int a = 0; a < d; ++a) g(a) = out.stream(layout.tangent(a))(row, 0);
-    if (!factored_) return 0;
-    const Eigen::VectorXd e = points_.row(index).transpose() - x0_;
+    if (!setup_.factored) return 0;
+    const Eigen::VectorXd e = points_.row(index).transpose() - setup_.x0;
     const double distance = e.norm();
-    const double t0 = distance / v0_;
+    const double t0 = distance / setup_.v0;
     if (distance > 0)
-      grad_t0 = e / (distance * v0_);
+      grad_t0 = e / (distance * setup_.v0);
     else
       grad_t0.setZero();
     const double tau = 1 + out.stream(StreamLayout::value())(row, 0);
@@ -216,13 +289,10 @@ class EikonalResidual final : public Residual {
     return t0;
   }
 
+  Kind kind_;
   Eigen::MatrixXd points_;
-  Eigen::VectorXd slowness_;
-  Eigen::MatrixXd normals_;
-  double length_;
-  bool factored_;
-  Eigen::VectorXd x0_;
-  double v0_;
+  Eigen::MatrixXd per_point_;
+  Setup setup_;
 };
 
 class Eikonal final : public Problem {
@@ -284,6 +354,19 @@ class Eikonal final : public Problem {
     outflow_weight_ = equation.get_or("outflow_weight", 1.0);
     equation.require("outflow_weight", outflow_weight_ >= 0 && std::isfinite(outflow_weight_),
                      "expected a weight >= 0");
+    const io::ConfigNode training = context.root.child_or_empty("training");
+    const std::size_t stages = training.has("stages") ? training.child("stages").size() : 1;
+    if (!equation.has("viscosity")) {
+      viscosity_ = {0.0};
+    } else if (equation.yaml()["viscosity"].IsSequence()) {
+      viscosity_ = equation.get<std::vector<double>>("viscosity");
+      equation.require("viscosity", viscosity_.size() == stages,
+                       "expected one value per training stage (" + std::to_string(stages) + ")");
+    } else {
+      viscosity_ = {equation.get<double>("viscosity")};
+    }
+    for (double epsilon : viscosity_)
+      equation.require("viscosity", epsilon >= 0 && std::isfinite(epsilon), "expected numbers >= 0");
     source_weight_ = equation.get_or("source_weight", 10.0);
     equation.require("source_weight", source_weight_ >= 0 && std::isfinite(source_weight_),
                      "expected a weight >= 0");
@@ -301,11 +384,20 @@ class Eikonal final : public Problem {
     pde.name = "pde";
     pde.batch_key = "interior";
     pde.weight = weight_;
-    pde.spec = autodiff::StreamSpec::gradient(d);
+    const bool viscous = *std::max_element(viscosity_.begin(), viscosity_.end()) > 0;
+    pde.spec = viscous ? autodiff::StreamSpec::laplacian(d) : autodiff::StreamSpec::gradient(d);
     pde.sample = [this](Random& rng, Eigen::Index n) { return sample_pde(rng, n); };
-    pde.residual = [this](const Eigen::MatrixXd& x) -> std::unique_ptr<Residual> {
-      const Eigen::VectorXd slowness = speeds(x).cwiseInverse();
-      return std::make_unique<EikonalResidual>(x, slowness, Eigen::MatrixXd(), 1.0, factored_, x0_, v0_);
+    // ε of the current stage: the last one's until a stage begins.
+    auto epsilon = std::make_shared<double>(viscosity_.back());
+    if (viscosity_.size() > 1)
+      pde.begin_stage = [this, epsilon](int stage) {
+        *epsilon = viscosity_.at(std::min<std::size_t>(stage, viscosity_.size() - 1));
+      };
+    pde.residual = [this, epsilon](const Eigen::MatrixXd& x) -> std::unique_ptr<Residual> {
+      EikonalResidual::Setup setup = residual_setup();
+      setup.viscosity = *epsilon;
+      return std::make_unique<EikonalResidual>(EikonalResidual::Kind::kEikonal, x,
+                                               speeds(x).cwiseInverse(), std::move(setup));
     };
     std::vector<LossTerm> terms{pde};
     if (outflow_weight_ > 0) {
@@ -318,8 +410,8 @@ class Eikonal final : public Problem {
         return domain_.sample_faces(domain_.faces(), rng, n);
       };
       outflow.residual = [this](const Eigen::MatrixXd& x) -> std::unique_ptr<Residual> {
-        return std::make_unique<EikonalResidual>(x, Eigen::VectorXd(), outward_normals(x), diameter(),
-                                                 factored_, x0_, v0_);
+        return std::make_unique<EikonalResidual>(EikonalResidual::Kind::kOutflow, x,
+                                                 outward_normals(x), residual_setup());
       };
       terms.push_back(outflow);
     }
@@ -333,10 +425,9 @@ class Eikonal final : public Problem {
       at_source.sample = [x0](Random&, Eigen::Index n) {
         return Eigen::MatrixXd(x0.replicate(n, 1));
       };
-      at_source.residual = [](const Eigen::MatrixXd& x) -> std::unique_ptr<Residual> {
-        return std::make_unique<LinearResidual>(
-            std::vector<LinearResidual::Term>{{0, 0, 0, Eigen::VectorXd::Ones(1)}},
-            Eigen::MatrixXd::Zero(x.rows(), 1));
+      at_source.residual = [this](const Eigen::MatrixXd& x) -> std::unique_ptr<Residual> {
+        return std::make_unique<EikonalResidual>(EikonalResidual::Kind::kSource, x,
+                                                 Eigen::MatrixXd(), residual_setup());
       };
       terms.push_back(at_source);
     }
@@ -405,6 +496,15 @@ class Eikonal final : public Problem {
     result.rel_l2 = norm > 0 ? error.norm() / norm : error.norm();
     result.max_abs_err = error.cwiseAbs().maxCoeff();
     return result;
+  }
+
+  EikonalResidual::Setup residual_setup() const {
+    EikonalResidual::Setup setup;
+    setup.factored = factored_;
+    setup.x0 = x0_;
+    setup.v0 = v0_;
+    setup.length = diameter();
+    return setup;
   }
 
   // The length of the domain's diagonal.
@@ -501,6 +601,7 @@ class Eikonal final : public Problem {
   double v0_ = 1, constant_speed_ = 0;
   bool factored_ = false;
   double weight_ = 1, source_weight_ = 10, outflow_weight_ = 1, source_fraction_ = 0.25;
+  std::vector<double> viscosity_{0.0};  // ε per training stage, or one for all
 };
 
 }  // namespace

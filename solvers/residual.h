@@ -65,6 +65,11 @@ struct LossTerm {
   autodiff::StreamSpec spec;
   std::function<Eigen::MatrixXd(Random&, Eigen::Index)> sample;
   std::function<std::unique_ptr<Residual>(const Eigen::MatrixXd& points)> residual;
+  // Optional: called when training stage s (0-based) starts, for terms whose residual
+  // changes from stage to stage (a continuation parameter such as the eikonal viscosity);
+  // residual() builds the current stage's residual afterwards. Before any call it builds the
+  // last stage's, which the outputs after training use.
+  std::function<void(int stage)> begin_stage;
 };
 
 // Adapts a residual on a point set to the autodiff StreamLoss: w/N Σ ‖r‖², r̄ = 2w r / N.

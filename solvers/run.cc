@@ -268,7 +268,8 @@ RunSetup load_run(const std::filesystem::path& config, const std::vector<std::st
   s.training = TrainingOptions::from_config(s.root.child_or_empty("training"));
   s.field = fields::field_options_from_config(s.root.child_or_empty("field"),
                                               s.problem->domain().input_dim(),
-                                              s.problem->output_dim(), s.training.seed);
+                                              s.problem->output_dim(), s.training.seed,
+                                              s.problem->domain().input_names());
   s.output = output_options(s.root.child_or_empty("output"), s.problem->domain(), config,
                             out_dir_override);
   // The batch keys are the problem's loss-term kinds: a misspelled one is an error, and the
@@ -298,7 +299,7 @@ RunSetup load_run(const std::filesystem::path& config, const std::vector<std::st
   s.root.reject_unknown_keys_recursive();
   s.resolved = YAML::Clone(s.root.yaml());
   s.resolved["training"] = s.training.to_yaml();
-  s.resolved["field"] = fields::to_yaml(s.field);
+  s.resolved["field"] = fields::to_yaml(s.field, s.problem->domain().input_names());
   s.resolved["output"] = output_yaml(s.output);
   return s;
 }

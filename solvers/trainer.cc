@@ -133,6 +133,43 @@ Eigen::VectorXd Trainer<Scalar>::squared_residuals(size_t k, const Eigen::Matrix
 }
 
 template <typename Scalar>
+void Trainer<Scalar>::begin_stage() {
+  for (size_t k = 0; k < terms_.size(); ++k) {
+    if (!terms_[k].begin_stage) continue;
+    terms_[k].begin_stage(stage_);
+    if (residuals_[k]) residuals_[k] = terms_[k].residual(points_[k]);
+  }
+}
+
+template <typename Scalar>
+bool Trainer<Scalar>::stage_ends(const StageOptions& stage, int segment, int segment_start,
+                                 bool early) const {
+  return stage_step_ >= stage.steps ||
+         (early && (segment >= stage.steps || stage_step_ == segment_start));
+}
+
+template <typename Scalar>
+void Trainer<Scalar>::renew_points(const StageOptions& stage) {
+  if (options_.adaptive.enabled) refine();
+  if (stage.resample_every > 0)
+    resample();
+  else if (options_.adaptive.enabled)
+    join_adaptive_points();
+}
+
+template <typename Scalar>
+void Trainer<Scalar>::join_adaptive_points() {
+  // The stage's own points stay; only the extra set behind them changes.
+  const Eigen::Index own = points_[pde_].rows() - previous_adaptive_rows_;
+  Eigen::MatrixXd joined(own + adaptive_points_.rows(), points_[pde_].cols());
+  joined << points_[pde_].topRows(own), adaptive_points_;
+  points_[pde_] = std::move(joined);
+  points_scalar_[pde_] = points_[pde_].template cast<Scalar>();
+  residuals_[pde_] = terms_[pde_].residual(points_[pde_]);
+  previous_adaptive_rows_ = adaptive_points_.rows();
+}
+
+template <typename Scalar>
 void Trainer<Scalar>::refine() {
   Eigen::MatrixXd candidates;
   {
@@ -320,6 +357,7 @@ bool Trainer<Scalar>::run_lbfgs(const StageOptions& stage, const Callbacks& call
   // of `every` iterations: a line search needs one objective. Each segment restarts Ceres
   // (and so the L-BFGS history) on the updated objective.
   int segment = stage.steps;
+  if (stage.resample_every > 0) segment = std::min(segment, stage.resample_every);
   if (options_.causal.enabled) segment = std::min(segment, options_.causal.every);
   if (options_.adaptive.enabled) segment = std::min(segment, options_.adaptive.every);
   if (options_.causal.enabled) update_causal();
@@ -355,19 +393,8 @@ bool Trainer<Scalar>::run_lbfgs(const StageOptions& stage, const Callbacks& call
     // the objective cannot change (no segments) or it made no step at all: an update of the
     // weights or points can give L-BFGS somewhere to go again.
     const bool early = summary.termination_type != ceres::NO_CONVERGENCE;
-    if (stopped || stage_step_ >= stage.steps || (early && (segment >= stage.steps || stage_step_ == segment_start)))
-      break;
-    if (options_.adaptive.enabled) {
-      refine();
-      // The stage's own points stay; only the extra set behind them changes.
-      const Eigen::Index own = points_[pde_].rows() - previous_adaptive_rows_;
-      Eigen::MatrixXd joined(own + adaptive_points_.rows(), points_[pde_].cols());
-      joined << points_[pde_].topRows(own), adaptive_points_;
-      points_[pde_] = std::move(joined);
-      points_scalar_[pde_] = points_[pde_].template cast<Scalar>();
-      residuals_[pde_] = terms_[pde_].residual(points_[pde_]);
-      previous_adaptive_rows_ = adaptive_points_.rows();
-    }
+    if (stopped || stage_ends(stage, segment, segment_start, early)) break;
+    renew_points(stage);
     if (options_.causal.enabled) update_causal();
   }
   // Converged early (no further decrease possible): the stage is done.
@@ -397,38 +424,20 @@ template <typename Scalar>
 bool Trainer<Scalar>::run_lm(const StageOptions& stage, const Callbacks& callbacks) {
   if (stage_step_ >= stage.steps) return true;
   resample();
-  // Ceres counts the entries of its dense Jacobian in an int.
-  double rows = 0;
-  for (size_t k = 0; k < terms_.size(); ++k)
-    rows += static_cast<double>(points_[k].rows()) * residuals_[k]->components();
-  const double entries = rows * static_cast<double>(field_.parameter_count());
-  if (entries > std::numeric_limits<int>::max())
-    throw std::runtime_error(
-        "training stage " + std::to_string(stage_ + 1) + " (lm): its Jacobian would have " +
-        std::to_string(static_cast<long long>(rows)) + " residuals x " +
-        std::to_string(field_.parameter_count()) + " parameters, more than the 2^31 - 1 " +
-        "entries Ceres' dense solvers hold; use fewer points (training.batch) or a smaller field");
+  // The least-squares problem is fixed for a segment of iterations: the whole stage, or
+  // `resample_every` (new points) or adaptive.every (RAR points added) iterations. Each
+  // segment is a new Ceres problem that starts from the trust-region radius the last ended
+  // with, so the damping carries over.
+  int segment = stage.steps;
+  if (stage.resample_every > 0) segment = std::min(segment, stage.resample_every);
+  if (options_.adaptive.enabled) segment = std::min(segment, options_.adaptive.every);
   Eigen::VectorXd theta = field_.parameters().template cast<double>();
-  std::vector<std::unique_ptr<TermCost<Scalar>>> costs;
-  for (size_t k = 0; k < terms_.size(); ++k)
-    costs.push_back(std::make_unique<TermCost<Scalar>>(
-        field_.network(), layouts_[k], points_scalar_[k],
-        // λ of training.balance is held fixed here, as in L-BFGS; causal weights are not
-        // applied in this stage (its residuals are the plain ones).
-        std::make_unique<ScaledResidual<Scalar>>(*residuals_[k], terms_[k].weight * balance_[k],
-                                                 points_[k].rows())));
-  ceres::Problem::Options problem_options;
-  problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  ceres::Problem problem(problem_options);
-  for (const auto& cost : costs) problem.AddResidualBlock(cost.get(), nullptr, theta.data());
-
   ceres::Solver::Options options;
   options.minimizer_type = ceres::TRUST_REGION;
   options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
   options.linear_solver_type =
       stage.linear_solver == "dense_normal_cholesky" ? ceres::DENSE_NORMAL_CHOLESKY : ceres::DENSE_QR;
   options.initial_trust_region_radius = stage.initial_radius;
-  options.max_num_iterations = stage.steps - stage_step_;
   // Run the steps asked for; stop early only when no step decreases the loss any more
   // (the trust region collapses), not at Ceres' default relative tolerances, which end
   // far above the accuracy a double-precision field can reach.
@@ -441,6 +450,7 @@ bool Trainer<Scalar>::run_lm(const StageOptions& stage, const Callbacks& callbac
   options.update_state_every_iteration = true;
   bool stopped = false;
   double last = now_seconds();
+  std::vector<std::unique_ptr<TermCost<Scalar>>> costs;
   StepCallback callback([&](const ceres::IterationSummary& summary) {
     field_.parameters() = theta.template cast<Scalar>();
     double total = 0;
@@ -452,15 +462,49 @@ bool Trainer<Scalar>::run_lm(const StageOptions& stage, const Callbacks& callbac
     return !stopped;
   });
   options.callbacks.push_back(&callback);
-  ceres::Solver::Summary summary;
-  ceres::Solve(options, &problem, &summary);
-  // Failing later (e.g. too many non-finite trial steps) ends the stage at its last iterate.
-  if (summary.termination_type == ceres::FAILURE && summary.iterations.empty())
-    throw std::runtime_error("training stage " + std::to_string(stage_ + 1) +
-                             " (lm): Ceres failed: " + summary.message);
-  field_.parameters() = theta.cast<Scalar>();
-  if (summary.iterations.size() <= 1)  // no step taken: report the losses at the start
-    for (size_t k = 0; k < costs.size(); ++k) losses_[k] = costs[k]->loss_at(theta.data());
+  while (true) {
+    // Ceres counts the entries of its dense Jacobian in an int.
+    double rows = 0;
+    for (size_t k = 0; k < terms_.size(); ++k)
+      rows += static_cast<double>(points_[k].rows()) * residuals_[k]->components();
+    const double entries = rows * static_cast<double>(field_.parameter_count());
+    if (entries > std::numeric_limits<int>::max())
+      throw std::runtime_error(
+          "training stage " + std::to_string(stage_ + 1) + " (lm): its Jacobian would have " +
+          std::to_string(static_cast<long long>(rows)) + " residuals x " +
+          std::to_string(field_.parameter_count()) + " parameters, more than the 2^31 - 1 " +
+          "entries Ceres' dense solvers hold; use fewer points (training.batch) or a smaller field");
+    costs.clear();
+    for (size_t k = 0; k < terms_.size(); ++k)
+      costs.push_back(std::make_unique<TermCost<Scalar>>(
+          field_.network(), layouts_[k], points_scalar_[k],
+          // λ of training.balance is held fixed here, as in L-BFGS; causal weights are not
+          // applied in this stage (its residuals are the plain ones).
+          std::make_unique<ScaledResidual<Scalar>>(*residuals_[k], terms_[k].weight * balance_[k],
+                                                   points_[k].rows())));
+    ceres::Problem::Options problem_options;
+    problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    ceres::Problem problem(problem_options);
+    for (const auto& cost : costs) problem.AddResidualBlock(cost.get(), nullptr, theta.data());
+    options.max_num_iterations = std::min(segment, stage.steps - stage_step_);
+    const int segment_start = stage_step_;
+    ceres::Solver::Summary summary;
+    ceres::Solve(options, &problem, &summary);
+    // Failing later (e.g. too many non-finite trial steps) ends the stage at its last iterate.
+    if (summary.termination_type == ceres::FAILURE && summary.iterations.empty())
+      throw std::runtime_error("training stage " + std::to_string(stage_ + 1) +
+                               " (lm): Ceres failed: " + summary.message);
+    field_.parameters() = theta.cast<Scalar>();
+    if (summary.iterations.size() <= 1)  // no step taken: report the losses at the start
+      for (size_t k = 0; k < costs.size(); ++k) losses_[k] = costs[k]->loss_at(theta.data());
+    if (!summary.iterations.empty())
+      options.initial_trust_region_radius = summary.iterations.back().trust_region_radius;
+    // As in L-BFGS: an early end (the trust region collapsed) ends the stage only when the
+    // problem cannot change or the segment made no step at all.
+    const bool early = summary.termination_type != ceres::NO_CONVERGENCE;
+    if (stopped || stage_ends(stage, segment, segment_start, early)) break;
+    renew_points(stage);
+  }
   if (!stopped) {
     global_step_ += stage.steps - stage_step_;
     stage_step_ = stage.steps;
@@ -475,6 +519,7 @@ bool Trainer<Scalar>::run(const Callbacks& callbacks) {
   for (; stage_ < static_cast<int>(options_.stages.size()); ++stage_) {
     const StageOptions& stage = options_.stages[stage_];
     const double stage_started = now_seconds();
+    begin_stage();
     const bool finished = stage.optimizer == "lbfgs" ? run_lbfgs(stage, callbacks)
                           : stage.optimizer == "lm"  ? run_lm(stage, callbacks)
                                                      : run_adam(stage, callbacks);

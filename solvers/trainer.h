@@ -107,6 +107,17 @@ class Trainer {
   double term_loss(size_t k, const Scalar* params, double weight, Scalar* gradient);
   Eigen::VectorXd squared_residuals(size_t k, const Eigen::MatrixXd& x, const Residual& r) const;
   void refine();
+  // Tells the terms that stage_ starts and rebuilds the residuals of those that listen.
+  void begin_stage();
+  // Whether a Ceres stage is over after a segment that began at step segment_start: all its
+  // steps are taken, or the segment ended early (`early`, no decrease found) and either the
+  // stage has no further segments or the segment made no step at all.
+  bool stage_ends(const StageOptions& stage, int segment, int segment_start, bool early) const;
+  // Between segments of a Ceres stage: RAR points, then a new point set (resample_every) or
+  // the RAR set joined to the stage's own points.
+  void renew_points(const StageOptions& stage);
+  // Puts the RAR set behind the PDE term's own points of the stage.
+  void join_adaptive_points();
   void update_causal();
   void balanced_gradient(Scalar* gradient);
   bool run_adam(const StageOptions& stage, const Callbacks& callbacks);

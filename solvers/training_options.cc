@@ -63,10 +63,12 @@ TrainingOptions TrainingOptions::from_config(const io::ConfigNode& node) {
         s.require("lr_final", stage.lr_final > 0, "expected a learning rate > 0");
       } else if (stage.optimizer == "lbfgs") {
         stage.memory = in_range_or(s, "memory", 1, 1000, 20);
+        stage.resample_every = in_range_or(s, "resample_every", 0, 1 << 30, 0);
       } else {
         stage.linear_solver =
             s.get_choice("linear_solver", {"dense_qr", "dense_normal_cholesky"}, "dense_qr");
         stage.initial_radius = in_range_or(s, "initial_radius", 1e-12, 1e16, 1e4);
+        stage.resample_every = in_range_or(s, "resample_every", 0, 1 << 30, 0);
       }
       s.reject_unknown_keys();
       o.stages.push_back(stage);
@@ -95,9 +97,11 @@ YAML::Node TrainingOptions::to_yaml() const {
       y["lr_final"] = s.lr_final;
     } else if (s.optimizer == "lbfgs") {
       y["memory"] = s.memory;
+      y["resample_every"] = s.resample_every;
     } else {
       y["linear_solver"] = s.linear_solver;
       y["initial_radius"] = s.initial_radius;
+      y["resample_every"] = s.resample_every;
     }
     n["stages"].push_back(y);
   }

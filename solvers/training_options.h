@@ -17,14 +17,15 @@
 //     causal: {epsilon: 1.0, slices: 32, every: 100}   # causal weights in time; absent: off
 //     stages:
 //       - {optimizer: adam, steps: 2000, lr: 1.0e-3, schedule: cosine, lr_final: 1.0e-5}
-//       - {optimizer: lbfgs, steps: 500, memory: 20}
+//       - {optimizer: lbfgs, steps: 500, memory: 20, resample_every: 0}
 //       - {optimizer: lm, steps: 200, linear_solver: dense_qr, initial_radius: 1.0e4}
 //
 // Stage keys by optimizer: adam reads lr, schedule, lr_final; lbfgs reads memory; lm
 // (Levenberg–Marquardt) reads linear_solver (dense_qr | dense_normal_cholesky, default
 // dense_qr) and initial_radius (Ceres' initial trust-region radius, default 1e4, in
-// [1e-12, 1e16]; the first damping is about its inverse). Keys of another optimizer are
-// rejected as unknown.
+// [1e-12, 1e16]; the first damping is about its inverse); lbfgs and lm read resample_every
+// (0, the default: one point set for the stage; k: a new set every k iterations, each a new
+// Ceres problem). Keys of another optimizer are rejected as unknown.
 #pragma once
 
 #include <cstdint>
@@ -46,6 +47,7 @@ struct StageOptions {
   int memory = 20;                   // lbfgs: history length
   std::string linear_solver = "dense_qr";  // lm: dense_qr | dense_normal_cholesky
   double initial_radius = 1e4;       // lm: initial trust-region radius
+  int resample_every = 0;            // lbfgs, lm: new points every k iterations (0: one set)
 
   // The Adam learning rate at step `step` (0-based) of this stage.
   double learning_rate(int step) const;

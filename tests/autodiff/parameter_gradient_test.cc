@@ -184,12 +184,11 @@ TEST(ParameterGradients, EncodingInsideTheNetwork) {
       eo.features = 4;
       eo.scale = 0.5;
       eo.seed = 3;
-      const Eigen::MatrixXd b = fields::encoding_matrix(eo, 3);
       autodiff::Sequential<double> net({.block_points = 2, .threads = 1});
       net.add(std::make_unique<fields::Dense<double>>(2, 3));
       net.add(std::make_unique<fields::ActivationLayer<double>>(
           fields::ActivationSpec{activation, 1.5}, 3));
-      net.add(std::make_unique<fields::SinusoidalEncoding<double>>(b, encoding == "positional"));
+      net.add(fields::make_encoding<double>(eo, 3));
       net.add(std::make_unique<fields::Dense<double>>(net.output_width(), 5));
       net.add(std::make_unique<fields::ActivationLayer<double>>(fields::ActivationSpec{"tanh", 1}, 5));
       net.add(std::make_unique<fields::Dense<double>>(5, 2));

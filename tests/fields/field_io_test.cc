@@ -38,6 +38,10 @@ void expect_round_trip(const FieldOptions& options, const std::string& name) {
   const FieldOptions o = load_field_options(file);
   EXPECT_EQ(o.hidden, options.hidden);
   EXPECT_EQ(o.encoding.type, options.encoding.type);
+  if (options.encoding.type == "cusp") {
+    EXPECT_EQ(o.encoding.axis, options.encoding.axis);
+    EXPECT_EQ(o.encoding.at, options.encoding.at);
+  }
   // Layout: layer 0 weight is (hidden[0], encoded input width).
   const auto shape = file.shape("field/layers/0/weight");
   ASSERT_EQ(shape.size(), 2u);
@@ -49,13 +53,15 @@ void expect_round_trip(const FieldOptions& options, const std::string& name) {
 }
 
 TEST(FieldIo, RoundTripIsBitExactForEveryEncodingAndPrecision) {
-  for (const std::string encoding : {"identity", "positional", "fourier"}) {
+  for (const std::string& encoding : encoding_names()) {
     FieldOptions options;
     options.input_dim = 3;
     options.output_dim = 2;
     options.hidden = {8, 6};
     options.encoding.type = encoding;
     options.encoding.features = 5;
+    options.encoding.axis = 1;
+    options.encoding.at = {-0.25, 0.5};
     expect_round_trip<float>(options, encoding + "_float.h5");
     expect_round_trip<double>(options, encoding + "_double.h5");
   }

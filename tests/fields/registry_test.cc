@@ -99,6 +99,45 @@ TEST(EncodingOptions, ValidationNamesTheField) {
   o.features = 4;
   o.scale = 0;
   EXPECT_NE(message_of([&] { o.validate(); }).find("encoding.scale"), std::string::npos);
+  o = {};
+  o.type = "cusp";
+  EXPECT_NE(message_of([&] { o.validate(); }).find("encoding.at = []"), std::string::npos);
+  o.at = {0.5};
+  o.axis = 2;
+  EXPECT_NO_THROW(o.validate());
+  EXPECT_NE(message_of([&] { encoding_matrix(o, 2); }).find("encoding.axis = 2"), std::string::npos);
+  FieldOptions f;
+  f.encoding = o;
+  EXPECT_NE(message_of([&] { f.validate(); }).find("encoding.axis"), std::string::npos);
+}
+
+// Cusp features: [x, |x_a − c_k|] with value, sign derivative and no curvature, by hand.
+TEST(EncodingOptions, CuspFeaturesAreDistancesToThePlanes) {
+  EncodingOptions o;
+  o.type = "cusp";
+  o.axis = 1;
+  o.at = {0.5, -0.25};
+  const auto encoding = make_encoding<double>(o, 2);
+  ASSERT_NE(encoding, nullptr);
+  ASSERT_EQ(encoding->output_width(), 4);
+  const autodiff::StreamLayout layout(autodiff::StreamSpec::laplacian(2));
+  autodiff::Streams<double> in, out;
+  in.resize(2, layout.count(), 2);
+  in.data.setZero();
+  in.stream(0) << 0.3, 0.2, -0.7, 0.9;  // points (0.3, 0.2), (−0.7, 0.9)
+  in.stream(layout.tangent(0))(0, 0) = in.stream(layout.tangent(0))(1, 0) = 1;
+  in.stream(layout.tangent(1))(0, 1) = in.stream(layout.tangent(1))(1, 1) = 1;
+  encoding->forward(layout, nullptr, in, out, nullptr);
+  EXPECT_DOUBLE_EQ(out.stream(0)(0, 2), 0.3);   // |0.2 − 0.5|
+  EXPECT_DOUBLE_EQ(out.stream(0)(0, 3), 0.45);  // |0.2 + 0.25|
+  EXPECT_DOUBLE_EQ(out.stream(0)(1, 2), 0.4);
+  EXPECT_DOUBLE_EQ(out.stream(0)(1, 0), -0.7);  // x itself first
+  EXPECT_EQ(out.stream(layout.tangent(1))(0, 2), -1);  // below the plane y = 0.5
+  EXPECT_EQ(out.stream(layout.tangent(1))(1, 2), 1);
+  EXPECT_EQ(out.stream(layout.tangent(0))(0, 2), 0);
+  for (int k = 0; k < layout.count(); ++k)
+    if (k != 0 && k != layout.tangent(0) && k != layout.tangent(1))
+      EXPECT_EQ(out.stream(k).rightCols(2).norm(), 0) << "stream " << k;
 }
 
 TEST(FieldRegistry, UnknownTypeAndActivationListValidNames) {

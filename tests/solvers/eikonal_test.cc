@@ -5,7 +5,8 @@
 // first-arrival time of the two-layer medium equals a brute-force search over interface
 // crossing points (direct, head and refracted waves) and satisfies |∇T| = 1/v; a short
 // factored run learns the constant-speed cone; the per-stage error of a factored run is the
-// travel time's, the same as the final one after the last stage.
+// travel time's, the same as the final one after the last stage; a viscosity list changes ε
+// from stage to stage.
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
@@ -49,44 +50,46 @@ double pairing(const Residual& residual, Eigen::Index first, const autodiff::Str
 // backward() against central differences of evaluate(), entry by entry of the streams, on
 // the block of points [first, first + count) of the set.
 void check_adjoint(const Residual& residual, const autodiff::StreamLayout& layout,
-                   Eigen::Index first, Eigen::Index count, std::mt19937_64& rng) {
+                   Eigen::Index first, Eigen::Index count, std::mt19937_64& rng, int width = 1) {
   autodiff::Streams<double> out;
-  out.resize(count, layout.count(), 1);
-  for (Eigen::Index i = 0; i < out.data.rows(); ++i) out.data(i, 0) = uniform(rng, -1, 1);
+  out.resize(count, layout.count(), width);
+  for (Eigen::Index i = 0; i < out.data.size(); ++i) out.data.data()[i] = uniform(rng, -1, 1);
   Eigen::MatrixXd r_bar(count, residual.components());
   for (Eigen::Index i = 0; i < r_bar.size(); ++i) r_bar.data()[i] = uniform(rng, -1, 1);
   autodiff::Streams<double> adjoint;
-  adjoint.resize(count, layout.count(), 1);
+  adjoint.resize(count, layout.count(), width);
   adjoint.data.setZero();
   residual.backward(first, layout, out, r_bar, adjoint);
   const double h = 1e-6;
   double worst = 0;
-  for (Eigen::Index i = 0; i < out.data.rows(); ++i) {
+  for (Eigen::Index i = 0; i < out.data.size(); ++i) {
     autodiff::Streams<double> plus = out, minus = out;
-    plus.data(i, 0) += h;
-    minus.data(i, 0) -= h;
+    plus.data.data()[i] += h;
+    minus.data.data()[i] -= h;
     const double fd = (pairing(residual, first, layout, plus, r_bar) -
                        pairing(residual, first, layout, minus, r_bar)) / (2 * h);
-    worst = std::max(worst, std::abs(fd - adjoint.data(i, 0)) / (1 + std::abs(fd)));
+    worst = std::max(worst, std::abs(fd - adjoint.data.data()[i]) / (1 + std::abs(fd)));
   }
   EXPECT_LT(worst, 1e-7);
 }
 
-// The "pde" and "outflow" terms (the nonlinear ones) of a config.
+// The "pde", "outflow" and "source" terms of a config.
 void check_pde_adjoint(const std::string& config) {
   const RunSetup setup = load_run(write_config("adjoint", config), {});
   const std::vector<LossTerm> terms = setup.problem->loss_terms();
   ASSERT_EQ(terms.at(0).name, "pde");
   ASSERT_EQ(terms.at(1).name, "outflow");
+  ASSERT_EQ(terms.at(2).name, "source");
+  const int width = setup.problem->output_dim();
   std::mt19937_64 rng(5);
   Random sampler(3);
-  for (int k = 0; k < 2; ++k) {
+  for (int k = 0; k < 3; ++k) {
     SCOPED_TRACE(terms[k].name);
     const Eigen::MatrixXd x = terms[k].sample(sampler, 24);
     const auto residual = terms[k].residual(x);
     const autodiff::StreamLayout layout(terms[k].spec);
-    check_adjoint(*residual, layout, 0, 24, rng);
-    check_adjoint(*residual, layout, 8, 16, rng);  // a later block: per-point data by index
+    check_adjoint(*residual, layout, 0, 24, rng, width);
+    check_adjoint(*residual, layout, 8, 16, rng, width);  // a later block: per-point data by index
   }
 }
 
@@ -109,7 +112,52 @@ equation:
   factored: )") + factored + R"(
 training: {batch: {interior: 64, boundary: 64, source: 1}}
 )");
+    // The viscous term (Laplacian stream).
+    check_pde_adjoint(std::string(R"(
+problem: eikonal
+domain: {lower: [0, 0], upper: [1, 1]}
+equation:
+  source: [0.5, 0.25]
+  layers: {axis: y, interface: 0.5, speeds: [1, 2]}
+  viscosity: 0.05
+  factored: )") + factored + R"(
+training: {batch: {interior: 64, boundary: 64, source: 1}}
+)");
   }
+}
+
+// A viscosity list gives ε per stage: the residual follows begin_stage, and before any call
+// it is the last stage's (what the outputs after training use).
+TEST(Eikonal, ViscosityPerStage) {
+  const RunSetup setup = load_run(write_config("viscosity_stages", R"(
+problem: eikonal
+domain: {lower: [0, 0], upper: [1, 1]}
+equation: {source: [0.5, 0.25], speed: "1", factored: false, viscosity: [0.5, 0]}
+training:
+  batch: {interior: 16, boundary: 16, source: 1}
+  stages: [{optimizer: adam, steps: 1}, {optimizer: adam, steps: 1}]
+)"), {});
+  LossTerm pde = setup.problem->loss_terms().at(0);
+  ASSERT_TRUE(static_cast<bool>(pde.begin_stage));
+  const autodiff::StreamLayout layout(pde.spec);
+  ASSERT_EQ(layout.operators(), 1);  // the Laplacian stream, for the viscous stage
+  Random sampler(2);
+  const Eigen::MatrixXd x = pde.sample(sampler, 8);
+  autodiff::Streams<double> out;
+  out.resize(8, layout.count(), 1);
+  out.data.setZero();
+  out.stream(layout.tangent(0)).setConstant(0.6);
+  out.stream(layout.tangent(1)).setConstant(0.8);  // |∇u| = 1
+  out.stream(layout.op(0)).setConstant(2.0);       // Δu = 2
+  Eigen::MatrixXd r;
+  pde.residual(x)->evaluate(0, layout, out, r);
+  EXPECT_NEAR(r.cwiseAbs().maxCoeff(), 0, 1e-15);  // last stage: ε = 0
+  pde.begin_stage(0);
+  pde.residual(x)->evaluate(0, layout, out, r);
+  for (Eigen::Index p = 0; p < 8; ++p) EXPECT_NEAR(r(p, 0), -0.5 * 2.0, 1e-15);
+  pde.begin_stage(1);
+  pde.residual(x)->evaluate(0, layout, out, r);
+  EXPECT_NEAR(r.cwiseAbs().maxCoeff(), 0, 1e-15);
 }
 
 TEST(Eikonal, SourceTermAndFactoredExact) {
@@ -341,6 +389,24 @@ problem: eikonal
 domain: {lower: [0, 0], upper: [1, 1]}
 equation: {source: [0.5, 0.5], speed: "1"}
 training: {batch: {interior: 64}}
+)"), {}), io::ConfigError);
+  try {
+    load_run(write_config("viscosity_count", R"(
+problem: eikonal
+domain: {lower: [0, 0], upper: [1, 1]}
+equation: {source: [0.5, 0.5], speed: "1", viscosity: [0.01, 0.001, 0]}
+training: {batch: {interior: 64, source: 1}, stages: [{optimizer: adam, steps: 1}, {optimizer: adam, steps: 1}]}
+)"), {});
+    ADD_FAILURE() << "a viscosity list of the wrong length was accepted";
+  } catch (const io::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("viscosity"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("one value per training stage (2)"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(load_run(write_config("negative_viscosity", R"(
+problem: eikonal
+domain: {lower: [0, 0], upper: [1, 1]}
+equation: {source: [0.5, 0.5], speed: "1", viscosity: -0.1}
+training: {batch: {interior: 64, source: 1}}
 )"), {}), io::ConfigError);
 }
 

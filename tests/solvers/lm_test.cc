@@ -2,8 +2,9 @@
 //
 // The Levenberg–Marquardt stage (optimizer: lm): on a small 2D Poisson problem it lowers
 // the error of an Adam-trained field by a large factor; its steps, stops and checkpoints
-// follow the trainer's callbacks; a stage that converges early counts as finished; its
-// config keys are validated and written back.
+// follow the trainer's callbacks; resample_every splits it into segments on new point sets;
+// a stage that converges early counts as finished; its config keys are validated and
+// written back.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -13,6 +14,7 @@
 #include <string>
 
 #include "io/config.h"
+#include "io/hdf5_file.h"
 #include "solvers/run.h"
 #include "solvers/trainer.h"
 #include "tests/testing/scratch.h"
@@ -143,6 +145,40 @@ TEST(LevenbergMarquardt, StopsCheckpointsAndResumesStepCount) {
   EXPECT_TRUE(field.parameters().allFinite());
 }
 
+// resample_every: the stage runs in segments of k iterations, each on a new point set, and
+// still takes exactly its steps; without it the stage keeps the set it drew at its start.
+TEST(LevenbergMarquardt, ResampleEveryDrawsNewPointsAndKeepsTheStepCount) {
+  auto run = [](const std::string& optimizer, int resample_every) {
+    const std::string stage = "    - {optimizer: " + optimizer + ", steps: 9, resample_every: " +
+                              std::to_string(resample_every) + "}\n";
+    RunSetup setup = load_run(
+        write_config(poisson_config(kSmallMlp, "{interior: 60, boundary: 20}", stage)), {});
+    fields::Field<double> field(setup.field);
+    Trainer<double> trainer(*setup.problem, field, setup.training);
+    std::vector<long> steps;
+    typename Trainer<double>::Callbacks callbacks;
+    callbacks.progress = [&](const Progress& p) { steps.push_back(p.step); };
+    EXPECT_TRUE(trainer.run(callbacks));
+    EXPECT_EQ(trainer.step(), 9);
+    for (size_t i = 0; i < steps.size(); ++i) EXPECT_EQ(steps[i], static_cast<long>(i + 1));
+    const std::filesystem::path path = testutil::scratch_dir("lm") / "resample_state.h5";
+    {
+      io::H5Writer file(path);
+      trainer.save_state(file);
+      file.commit();
+    }
+    return io::H5Reader(path).read_matrix<double>("trainer/points/0");
+  };
+  for (const std::string optimizer : {"lm", "lbfgs"}) {
+    SCOPED_TRACE(optimizer);
+    const Eigen::MatrixXd kept = run(optimizer, 0), again = run(optimizer, 0);
+    const Eigen::MatrixXd resampled = run(optimizer, 3);
+    EXPECT_EQ(kept, again);  // deterministic
+    ASSERT_EQ(resampled.rows(), kept.rows());
+    EXPECT_NE(resampled, kept);  // the last segment's set, not the first
+  }
+}
+
 // Fewer residuals than parameters: LM fits them to rounding, its trust region then
 // collapses and Ceres ends the stage early. The stage still counts as finished.
 TEST(LevenbergMarquardt, EarlyConvergenceFinishesTheStage) {
@@ -228,6 +264,10 @@ TEST(LevenbergMarquardtConfig, KeysOfOtherOptimizersAreRejected) {
                       {15, 33, "training.stages[0]", "unknown key 'memory'"});
   expect_config_error("    - {optimizer: lbfgs, steps: 5, linear_solver: dense_qr}\n",
                       {15, 36, "training.stages[0]", "unknown key 'linear_solver'"});
+  expect_config_error("    - {optimizer: adam, steps: 5, resample_every: 2}\n",
+                      {15, 35, "training.stages[0]", "unknown key 'resample_every'"});
+  expect_config_error("    - {optimizer: lm, steps: 5, resample_every: -1}\n",
+                      {15, 49, "training.stages[0].resample_every", "expected an integer in [0, "});
 }
 
 TEST(LevenbergMarquardtConfig, ResolvedConfigKeepsTheKeys) {

@@ -7,6 +7,7 @@
 //
 // Layout read (fields/field.h, fields/dense.h, fields/encodings.h):
 //   encoding   [x if positional and include_input, sin(x Bᵀ), cos(x Bᵀ)], B = encoding_matrix()
+//              cusp: [x, |x_a − c_k| for the planes c_k of options.encoding.at]
 //   hidden l   z = W a + b (W out × in column-major, then b), y = σ_l(z)
 //              siren: σ_l = sin(ω_l ·), ω_0 = first_omega, ω_l = hidden_omega for l > 0
 //              mlp:   σ_l = `activation` (sine with frequency hidden_omega)
@@ -190,10 +191,12 @@ class ReferenceField {
         parameters_(std::move(parameters)),
         encoding_(std::move(encoding)) {
     siren_ = Registry<int>::lower(options_.type) == "siren";
-    include_input_ = encoding_.rows() == 0 ||
+    cusp_ = Registry<int>::lower(options_.encoding.type) == "cusp";
+    include_input_ = encoding_.rows() == 0 || cusp_ ||
                      (Registry<int>::lower(options_.encoding.type) == "positional" &&
                       options_.encoding.include_input);
-    Eigen::Index width = (include_input_ ? options_.input_dim : 0) + 2 * encoding_.rows();
+    Eigen::Index width = (include_input_ ? options_.input_dim : 0) +
+                         (cusp_ ? 1 : 2) * encoding_.rows();
     Eigen::Index count = 0;
     for (int h : options_.hidden) {
       count += h * width + h;
@@ -231,8 +234,8 @@ class ReferenceField {
     return run<T>(x, nullptr);
   }
 
-  // Pre-activations z of every hidden unit at x, for keeping finite differences away from
-  // ReLU kinks.
+  // Pre-activations z of every hidden unit at x (and x_a − c of cusp features), for keeping
+  // finite differences away from kinks.
   std::vector<double> preactivations(const std::vector<double>& x) const {
     std::vector<double> z;
     run<double>(x, &z);
@@ -248,7 +251,14 @@ class ReferenceField {
     if (static_cast<int>(x.size()) != d) throw std::logic_error("ReferenceField: wrong input size");
     std::vector<T> a;
     if (include_input_) a = x;
-    if (encoding_.rows() > 0) {
+    if (cusp_) {
+      // Written from the definition, not from encoding_matrix(): |x_a − c|.
+      for (double c : options_.encoding.at) {
+        const T z = x[options_.encoding.axis] - constant<T>(c);
+        if (pre) pre->push_back(value_of(z));
+        a.push_back(value_of(z) < 0 ? -z : z);
+      }
+    } else if (encoding_.rows() > 0) {
       std::vector<T> z(encoding_.rows(), constant<T>(0.0));
       for (Eigen::Index r = 0; r < encoding_.rows(); ++r)
         for (int c = 0; c < d; ++c) z[r] = z[r] + constant<T>(encoding_(r, c)) * x[c];
@@ -285,7 +295,7 @@ class ReferenceField {
   fields::FieldOptions options_;
   Eigen::VectorXd parameters_;
   Eigen::MatrixXd encoding_;
-  bool siren_ = true, include_input_ = true;
+  bool siren_ = true, cusp_ = false, include_input_ = true;
   std::vector<std::shared_ptr<autodiff::ElementwiseFunction<double>>> tables_;
 };
 

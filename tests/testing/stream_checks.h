@@ -300,13 +300,17 @@ inline fields::FieldOptions small_options(const NetworkCase& c, int input_dim, i
   o.encoding.features = 8;
   o.encoding.scale = 1.0;
   o.encoding.seed = seed + 17;
+  o.encoding.axis = input_dim - 1;
+  o.encoding.at = {-0.3, 0.45};
   o.seed = seed;
   return o;
 }
 
-// Whether the network has kinks (ReLU) that finite differences must not straddle.
+// Whether the network has kinks (ReLU, cusp features) that finite differences must not
+// straddle.
 inline bool has_kinks(const fields::FieldOptions& o) {
-  return Registry<int>::lower(o.type) != "siren" && Registry<int>::lower(o.activation) == "relu";
+  return (Registry<int>::lower(o.type) != "siren" && Registry<int>::lower(o.activation) == "relu") ||
+         Registry<int>::lower(o.encoding.type) == "cusp";
 }
 
 // Signs of every hidden pre-activation at every point.
