@@ -51,7 +51,8 @@ class Field {
 
   autodiff::Vector<Scalar>& parameters() { return parameters_; }
   const autodiff::Vector<Scalar>& parameters() const { return parameters_; }
-  // The fixed encoding matrix B (empty for the identity encoding).
+  // The fixed linear part of the encoding (encoding_matrix() of fields/encodings.h: B, or the
+  // rows e_a of a cusp encoding; empty for the identity).
   const Eigen::MatrixXd& encoding_matrix() const { return encoding_matrix_; }
 
   const autodiff::Sequential<Scalar>& network() const { return network_; }
