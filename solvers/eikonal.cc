@@ -46,10 +46,11 @@
 // Lions): rounding a concave kink (two fronts meeting) gives Δu < 0 together with |∇u| < 1/v,
 // which the term balances, while rounding a convex one gives Δu > 0 and a residual that grows.
 // ε biases the result by about ε times the curvature, so it is meant to fall over the training
-// stages to 0 or nearly so: a list gives one ε per stage. Factored, the term is
-// ε (Δu − (1 + τ) ΔT₀) = ε (2 ∇T₀·∇τ + T₀ Δτ): the curvature ΔT₀ = (d − 1)/(v₀ |x − x₀|) of the
-// analytic factor is left out, as it would dominate the residual near the source, where there
-// is no branch to select.
+// stages to a small value: a list gives one ε per stage (on the two-layer example, falling to
+// 0 let LM drift back to such fields, 3e-3 → 8e-3; held at 1e-3 it did not). Factored, the
+// term is ε (Δu − (1 + τ) ΔT₀) = ε (2 ∇T₀·∇τ + T₀ Δτ): the curvature ΔT₀ = (d − 1)/(v₀ |x − x₀|)
+// of the analytic factor is left out, as it would dominate the residual near the source,
+// where there is no branch to select.
 //
 // The solution is a cone at x₀ (u ≈ |x − x₀|/v₀), whose kink a smooth network rounds off.
 // With `factored: true` the travel time is factored as u = T₀ (1 + τ) with the analytic
