@@ -256,6 +256,34 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
   return finished ? 0 : 130;
 }
 
+// An LM stage's dense Jacobian has to fit Ceres' int-indexed matrices. Checked here so that
+// an oversized one is reported at load time, not after the stages before it have run (the
+// trainer checks again when the stage starts).
+void check_lm_jacobian(const RunSetup& s) {
+  const auto& stages = s.training.stages;
+  const auto lm = std::find_if(stages.begin(), stages.end(),
+                               [](const StageOptions& stage) { return stage.optimizer == "lm"; });
+  if (lm == stages.end()) return;
+  const std::vector<LossTerm> terms = s.problem->loss_terms();
+  Random rng(0);
+  double rows = 0;
+  for (size_t k = 0; k < terms.size(); ++k) {
+    double points = static_cast<double>(s.training.batch.at(terms[k].batch_key));
+    if (s.training.adaptive.enabled && static_cast<int>(k) == s.problem->residual_term())
+      points += static_cast<double>(s.training.adaptive.max_points);
+    rows += points * terms[k].residual(terms[k].sample(rng, 1))->components();
+  }
+  const Eigen::Index parameters = fields::Field<double>(s.field).parameter_count();
+  if (rows * static_cast<double>(parameters) <= std::numeric_limits<int>::max()) return;
+  const auto index = static_cast<std::size_t>(lm - stages.begin());
+  throw s.root.child("training").child("stages").at(index).error(
+      "optimizer", "an lm stage here would need a Jacobian of " +
+                       std::to_string(static_cast<long long>(rows)) + " residuals x " +
+                       std::to_string(parameters) + " parameters, more than the 2^31 - 1 " +
+                       "entries Ceres' dense solvers hold; use fewer points (training.batch) " +
+                       "or a smaller field");
+}
+
 }  // namespace
 
 RunSetup load_run(const std::filesystem::path& config, const std::vector<std::string>& overrides,
@@ -295,6 +323,7 @@ RunSetup load_run(const std::filesystem::path& config, const std::vector<std::st
   });
   check_against_problem(s.root.child_or_empty("training"), s.training.adaptive, s.training.balance,
                         s.training.causal, *s.problem);
+  check_lm_jacobian(s);
   s.root.child_or_empty("training").reject_unknown_keys();
   s.root.reject_unknown_keys_recursive();
   s.resolved = YAML::Clone(s.root.yaml());

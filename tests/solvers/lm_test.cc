@@ -199,28 +199,42 @@ TEST(LevenbergMarquardt, EarlyConvergenceFinishesTheStage) {
   EXPECT_LT(trainer.step_milliseconds().size(), 402u);
 }
 
-// A Jacobian beyond Ceres' int-sized dense matrices is refused with a message, before any
-// of it is allocated.
+// A Jacobian beyond Ceres' int-sized dense matrices is refused with a located message when
+// the config is loaded, before any training; the trainer refuses it too, before any of it is
+// allocated (RAR points could grow it past the load-time count).
 TEST(LevenbergMarquardt, OversizedJacobianIsRefused) {
+  const std::string field = "{type: siren, hidden: [256, 256, 256]}";
+  const std::string batch = "{interior: 20000, boundary: 40}";
+  fields::FieldOptions options;
+  options.type = "siren";
+  options.hidden = {256, 256, 256};
+  const std::string size =
+      "20040 residuals x " + std::to_string(fields::Field<double>(options).parameter_count()) +
+      " parameters";
+  const auto path = write_config(poisson_config(
+      field, batch, "    - {optimizer: adam, steps: 1}\n    - {optimizer: lm, steps: 1}\n"));
+  try {
+    load_run(path, {});
+    ADD_FAILURE() << "no error at load time";
+  } catch (const io::ConfigError& e) {
+    EXPECT_EQ(e.line(), 16) << e.what();  // the lm stage
+    EXPECT_EQ(e.key_path(), "training.stages[1].optimizer") << e.what();
+    EXPECT_NE(std::string(e.what()).find(size), std::string::npos) << e.what();
+  }
+  // The trainer's own check: the same config with a small batch, enlarged afterwards.
   RunSetup setup = load_run(
-      write_config(poisson_config("{type: siren, hidden: [256, 256, 256]}",
-                                  "{interior: 20000, boundary: 40}",
-                                  "    - {optimizer: lm, steps: 1}\n")),
+      write_config(poisson_config(field, "{interior: 20, boundary: 40}", "    - {optimizer: lm, steps: 1}\n")),
       {});
-  fields::Field<float> field(setup.field);
-  Trainer<float> trainer(*setup.problem, field, setup.training);
+  setup.training.batch["interior"] = 20000;
+  fields::Field<float> small(setup.field);
+  Trainer<float> trainer(*setup.problem, small, setup.training);
   try {
     trainer.run({});
-    ADD_FAILURE() << "no error";
+    ADD_FAILURE() << "no error from the trainer";
   } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("20040 residuals x " +
-                                         std::to_string(field.parameter_count()) + " parameters"),
-              std::string::npos)
-        << e.what();
+    EXPECT_NE(std::string(e.what()).find(size), std::string::npos) << e.what();
   }
 }
-
-// ---- config ----------------------------------------------------------------------------
 
 struct Located {
   int line, column;
