@@ -273,15 +273,12 @@ void check_lm_jacobian(const RunSetup& s) {
       points += static_cast<double>(s.training.adaptive.max_points);
     rows += points * terms[k].residual(terms[k].sample(rng, 1))->components();
   }
-  const Eigen::Index parameters = fields::Field<double>(s.field).parameter_count();
-  if (rows * static_cast<double>(parameters) <= std::numeric_limits<int>::max()) return;
+  const std::string too_large =
+      lm_jacobian_too_large(rows, fields::Field<double>(s.field).parameter_count());
+  if (too_large.empty()) return;
   const auto index = static_cast<std::size_t>(lm - stages.begin());
   throw s.root.child("training").child("stages").at(index).error(
-      "optimizer", "an lm stage here would need a Jacobian of " +
-                       std::to_string(static_cast<long long>(rows)) + " residuals x " +
-                       std::to_string(parameters) + " parameters, more than the 2^31 - 1 " +
-                       "entries Ceres' dense solvers hold; use fewer points (training.batch) " +
-                       "or a smaller field");
+      "optimizer", "an lm stage here would need a Jacobian of " + too_large);
 }
 
 }  // namespace

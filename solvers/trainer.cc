@@ -141,6 +141,22 @@ void Trainer<Scalar>::begin_stage() {
   }
 }
 
+std::string lm_jacobian_too_large(double rows, Eigen::Index parameters) {
+  if (rows * static_cast<double>(parameters) <= std::numeric_limits<int>::max()) return "";
+  return std::to_string(static_cast<long long>(rows)) + " residuals x " +
+         std::to_string(parameters) + " parameters, more than the 2^31 - 1 entries Ceres' " +
+         "dense solvers hold; use fewer points (training.batch) or a smaller field";
+}
+
+template <typename Scalar>
+int Trainer<Scalar>::segment_length(const StageOptions& stage, bool with_causal) const {
+  int segment = stage.steps;
+  if (stage.resample_every > 0) segment = std::min(segment, stage.resample_every);
+  if (with_causal && options_.causal.enabled) segment = std::min(segment, options_.causal.every);
+  if (options_.adaptive.enabled) segment = std::min(segment, options_.adaptive.every);
+  return segment;
+}
+
 template <typename Scalar>
 bool Trainer<Scalar>::stage_ends(const StageOptions& stage, int segment, int segment_start,
                                  bool early) const {
@@ -356,10 +372,7 @@ bool Trainer<Scalar>::run_lbfgs(const StageOptions& stage, const Callbacks& call
   // λ stays as it is for the whole stage, and causal weights and the RAR set for a segment
   // of `every` iterations: a line search needs one objective. Each segment restarts Ceres
   // (and so the L-BFGS history) on the updated objective.
-  int segment = stage.steps;
-  if (stage.resample_every > 0) segment = std::min(segment, stage.resample_every);
-  if (options_.causal.enabled) segment = std::min(segment, options_.causal.every);
-  if (options_.adaptive.enabled) segment = std::min(segment, options_.adaptive.every);
+  const int segment = segment_length(stage, options_.causal.enabled);
   if (options_.causal.enabled) update_causal();
   Eigen::VectorXd theta = field_.parameters().template cast<double>();
   auto* function = new LossFunction<Scalar>(
@@ -428,9 +441,7 @@ bool Trainer<Scalar>::run_lm(const StageOptions& stage, const Callbacks& callbac
   // `resample_every` (new points) or adaptive.every (RAR points added) iterations. Each
   // segment is a new Ceres problem that starts from the trust-region radius the last ended
   // with, so the damping carries over.
-  int segment = stage.steps;
-  if (stage.resample_every > 0) segment = std::min(segment, stage.resample_every);
-  if (options_.adaptive.enabled) segment = std::min(segment, options_.adaptive.every);
+  const int segment = segment_length(stage, false);
   Eigen::VectorXd theta = field_.parameters().template cast<double>();
   ceres::Solver::Options options;
   options.minimizer_type = ceres::TRUST_REGION;
@@ -467,13 +478,10 @@ bool Trainer<Scalar>::run_lm(const StageOptions& stage, const Callbacks& callbac
     double rows = 0;
     for (size_t k = 0; k < terms_.size(); ++k)
       rows += static_cast<double>(points_[k].rows()) * residuals_[k]->components();
-    const double entries = rows * static_cast<double>(field_.parameter_count());
-    if (entries > std::numeric_limits<int>::max())
-      throw std::runtime_error(
-          "training stage " + std::to_string(stage_ + 1) + " (lm): its Jacobian would have " +
-          std::to_string(static_cast<long long>(rows)) + " residuals x " +
-          std::to_string(field_.parameter_count()) + " parameters, more than the 2^31 - 1 " +
-          "entries Ceres' dense solvers hold; use fewer points (training.batch) or a smaller field");
+    const std::string too_large = lm_jacobian_too_large(rows, field_.parameter_count());
+    if (!too_large.empty())
+      throw std::runtime_error("training stage " + std::to_string(stage_ + 1) +
+                               " (lm): its Jacobian would be " + too_large);
     costs.clear();
     for (size_t k = 0; k < terms_.size(); ++k)
       costs.push_back(std::make_unique<TermCost<Scalar>>(

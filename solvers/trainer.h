@@ -109,6 +109,10 @@ class Trainer {
   void refine();
   // Tells the terms that stage_ starts and rebuilds the residuals of those that listen.
   void begin_stage();
+  // Iterations per segment of a Ceres stage (one problem for Ceres): the whole stage, or
+  // fewer where the point set changes (resample_every, adaptive.every) or, with_causal, the
+  // causal weights (causal.every; L-BFGS only).
+  int segment_length(const StageOptions& stage, bool with_causal) const;
   // Whether a Ceres stage is over after a segment that began at step segment_start: all its
   // steps are taken, or the segment ended early (`early`, no decrease found) and either the
   // stage has no further segments or the segment made no step at all.
@@ -152,5 +156,10 @@ class Trainer {
   std::vector<double> balance_;           // λ per term (1 unless grad_norm)
   CausalWeights causal_;
 };
+
+// Ceres' dense solvers index the Jacobian with an int: for rows × parameters beyond 2³¹ − 1,
+// the end of a message ("R residuals x P parameters, more than … ; use fewer points …");
+// empty when it fits. The trainer refuses such an LM stage, load_run such a config.
+std::string lm_jacobian_too_large(double rows, Eigen::Index parameters);
 
 }  // namespace nfield::solvers

@@ -17,6 +17,7 @@
 #include "io/hdf5_file.h"
 #include "solvers/run.h"
 #include "solvers/trainer.h"
+#include "tests/testing/config_errors.h"
 #include "tests/testing/scratch.h"
 
 namespace nfield::solvers {
@@ -236,25 +237,11 @@ TEST(LevenbergMarquardt, OversizedJacobianIsRefused) {
   }
 }
 
-struct Located {
-  int line, column;
-  std::string key_path, part;
-};
+using testutil::Located;
 
 void expect_config_error(const std::string& stage, const Located& want) {
-  const auto path = write_config(poisson_config(kSmallMlp, "{interior: 10, boundary: 4}", stage));
-  try {
-    load_run(path, {});
-    ADD_FAILURE() << "no error for " << stage;
-  } catch (const io::ConfigError& e) {
-    EXPECT_EQ(e.file(), path.string());
-    EXPECT_EQ(e.line(), want.line) << e.what();
-    EXPECT_EQ(e.column(), want.column) << e.what();
-    EXPECT_EQ(e.key_path(), want.key_path) << e.what();
-    EXPECT_NE(std::string(e.what()).find(want.part), std::string::npos) << e.what();
-  } catch (const std::exception& e) {
-    ADD_FAILURE() << "not a ConfigError: " << e.what();
-  }
+  testutil::expect_located_error(
+      write_config(poisson_config(kSmallMlp, "{interior: 10, boundary: 4}", stage)), want);
 }
 
 TEST(LevenbergMarquardtConfig, UnknownLinearSolverIsAConfigError) {

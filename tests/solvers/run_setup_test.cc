@@ -13,6 +13,7 @@
 #include "io/hdf5_file.h"
 #include "solvers/run.h"
 #include "solvers/trainer.h"
+#include "tests/testing/config_errors.h"
 #include "tests/testing/scratch.h"
 
 namespace nfield::solvers {
@@ -47,25 +48,10 @@ std::string replaced(const std::string& from, const std::string& to) {
   return text.replace(at, from.size(), to);
 }
 
-struct Located {
-  int line, column;
-  std::string key_path, part;
-};
+using testutil::Located;
 
 void expect_config_error(const std::string& text, const Located& want) {
-  const auto path = write_config(text);
-  try {
-    load_run(path, {});
-    ADD_FAILURE() << "no error for\n" << text;
-  } catch (const io::ConfigError& e) {
-    EXPECT_EQ(e.file(), path.string());
-    EXPECT_EQ(e.line(), want.line) << e.what();
-    EXPECT_EQ(e.column(), want.column) << e.what();
-    EXPECT_EQ(e.key_path(), want.key_path) << e.what();
-    EXPECT_NE(std::string(e.what()).find(want.part), std::string::npos) << e.what();
-  } catch (const std::exception& e) {
-    ADD_FAILURE() << "not a ConfigError: " << e.what();
-  }
+  testutil::expect_located_error(write_config(text), want);
 }
 
 TEST(LoadRun, ExpressionInValueListIsAConfigError) {
