@@ -287,7 +287,10 @@ RunSetup load_run(const std::filesystem::path& config, const std::vector<std::st
                   const std::filesystem::path& out_dir_override,
                   const std::filesystem::path& data_dir) {
   RunSetup s{.config_path = config, .root = io::load_config(config, overrides)};
-  s.data_dir = data_dir.empty() ? config.parent_path() : data_dir;
+  // A bare file name ("nfield run poisson.yaml") has an empty parent: its folder is ".".
+  s.data_dir = !data_dir.empty()         ? data_dir
+               : config.has_parent_path() ? config.parent_path()
+                                          : std::filesystem::path(".");
   s.root.get_choice("problem", problem_names());
   s.problem = make_problem({s.root, s.data_dir});
   s.training = TrainingOptions::from_config(s.root.child_or_empty("training"));

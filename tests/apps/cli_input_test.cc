@@ -251,6 +251,19 @@ TEST_P(BadConfigTest, RunRefusesAndWritesNothing) {
 INSTANTIATE_TEST_SUITE_P(Cases, BadConfigTest, ::testing::ValuesIn(bad_configs()),
                          [](const ::testing::TestParamInfo<BadConfig>& info) { return info.param.name; });
 
+// A config named without a folder, from its own folder: its data folder is ".", and the run
+// writes its outputs (an empty parent path once made `std::filesystem::absolute` throw).
+TEST(GoodConfig, RunsWhenNamedWithoutAFolder) {
+  const auto dir = scratch_dir();
+  const auto work = dir / "work";
+  std::filesystem::create_directories(work);
+  write_text(work / "good.yaml", kBase);
+  const Outcome o = run_nfield({"run", "good.yaml", "--out", "out"}, work, dir / "capture");
+  EXPECT_EQ(o.code, 0) << describe(o);
+  EXPECT_TRUE(std::filesystem::exists(work / "out" / "metrics.json")) << describe(o);
+  EXPECT_TRUE(std::filesystem::exists(work / "out" / "checkpoint.h5")) << describe(o);
+}
+
 // The base config itself is fine (so each case above fails for its own reason only).
 TEST(GoodConfig, ValidatesAndRuns) {
   const auto dir = scratch_dir();
