@@ -192,7 +192,7 @@ class EikonalResidual final : public Residual {
       } else {
         r(p, 0) = g.norm() - per_point_(first + p, 0);
         if (setup_.viscosity > 0)
-          r(p, 0) -= setup_.viscosity * laplacian(p, t0, grad_t0, layout, out);
+          r(p, 0) -= setup_.viscosity * laplacian(first + p, p, t0, layout, out);
       }
     }
   }
@@ -217,7 +217,7 @@ class EikonalResidual final : public Residual {
         g_bar = r_bar(p, 0) * normal;
       } else {
         if (setup_.viscosity > 0)
-          laplacian_backward(p, t0, grad_t0, -setup_.viscosity * r_bar(p, 0), layout, adjoint);
+          laplacian_backward(first + p, p, t0, -setup_.viscosity * r_bar(p, 0), layout, adjoint);
         const double norm = g.norm();
         if (!(norm > 1e-12)) continue;  // |g| is not differentiable at 0: subgradient 0
         g_bar = (r_bar(p, 0) / norm) * g;
@@ -232,29 +232,38 @@ class EikonalResidual final : public Residual {
   }
 
  private:
-  // The viscous term's Laplacian at row `row`; plain: Δu, the Laplacian stream; factored,
-  // with T₀ and ∇T₀ from gradient(): Δu − (1 + τ) ΔT₀ = 2 ∇T₀·∇τ + T₀ Δτ, without the
-  // curvature ΔT₀ = (d − 1)/(v₀ |x − x₀|) of the analytic factor (see the header).
-  double laplacian(Eigen::Index row, double t0, const Eigen::VectorXd& grad_t0,
+  // The viscous term's Laplacian at point `index` (row `row`); plain: Δu, the
+  // Laplacian stream; factored, with T₀ from gradient(): Δu − (1 + τ) ΔT₀ = 2 ∇T₀·∇τ + T₀ Δτ,
+  // without the curvature ΔT₀ = (d − 1)/(v₀ |x − x₀|) of the analytic factor (see the header).
+  // ∇T₀ is formed here again rather than taken from gradient(): the two round differently in
+  // the last bit, and the two-layer accuracy run is that sensitive (README, Accuracy).
+  double laplacian(Eigen::Index index, Eigen::Index row, double t0,
                    const StreamLayout& layout, const Streams<double>& out) const {
     const double lap = out.stream(layout.op(0))(row, 0);
     if (!setup_.factored) return lap;
+    const int d = static_cast<int>(points_.cols());
+    const Eigen::VectorXd e = points_.row(index).transpose() - setup_.x0;
+    const double distance = e.norm();
+    if (!(distance > 0)) return 0;
     double grad_dot = 0;
-    for (Eigen::Index a = 0; a < grad_t0.size(); ++a)
-      grad_dot += grad_t0(a) * out.stream(layout.tangent(static_cast<int>(a)))(row, 0);
+    for (int a = 0; a < d; ++a)
+      grad_dot += e(a) / (distance * setup_.v0) * out.stream(layout.tangent(a))(row, 0);
     return 2 * grad_dot + t0 * lap;
   }
 
   // Adds weight · ∂(viscous Laplacian)/∂(streams) to the adjoint streams.
-  void laplacian_backward(Eigen::Index row, double t0, const Eigen::VectorXd& grad_t0,
-                          double weight, const StreamLayout& layout,
-                          Streams<double>& adjoint) const {
+  void laplacian_backward(Eigen::Index index, Eigen::Index row, double t0, double weight,
+                          const StreamLayout& layout, Streams<double>& adjoint) const {
     if (!setup_.factored) {
       adjoint.stream(layout.op(0))(row, 0) += weight;
       return;
     }
-    for (Eigen::Index a = 0; a < grad_t0.size(); ++a)
-      adjoint.stream(layout.tangent(static_cast<int>(a)))(row, 0) += weight * 2 * grad_t0(a);
+    const int d = static_cast<int>(points_.cols());
+    const Eigen::VectorXd e = points_.row(index).transpose() - setup_.x0;
+    const double distance = e.norm();
+    if (!(distance > 0)) return;
+    for (int a = 0; a < d; ++a)
+      adjoint.stream(layout.tangent(a))(row, 0) += weight * 2 * e(a) / (distance * setup_.v0);
     adjoint.stream(layout.op(0))(row, 0) += weight * t0;
   }
 
