@@ -423,6 +423,13 @@ std::string ConfigNode::get_choice(std::string_view key,
   throw error(key, "expected one of " + join(choices) + "; got '" + value + "'");
 }
 
+std::string ConfigNode::as_choice(const std::vector<std::string>& choices) const {
+  const std::string value = as<std::string>();
+  for (const std::string& choice : choices)
+    if (to_lower(choice) == to_lower(value)) return choice;
+  throw error("expected one of " + join(choices) + "; got '" + value + "'");
+}
+
 std::string ConfigNode::get_choice(std::string_view key, const std::vector<std::string>& choices,
                                    std::string_view fallback) const {
   std::optional<Entry> entry = find(key);

@@ -111,6 +111,8 @@ class ConfigNode {
   // This node's own value, e.g. for elements of a list.
   template <ConfigValue T>
   T as() const;
+  // This node's value as one of `choices`, like get_choice.
+  std::string as_choice(const std::vector<std::string>& choices) const;
 
   const std::string& file() const { return file_; }
   const std::string& path() const { return path_; }

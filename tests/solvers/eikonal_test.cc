@@ -6,7 +6,8 @@
 // crossing points (direct, head and refracted waves) and satisfies |∇T| = 1/v; a short
 // factored run learns the constant-speed cone; the per-stage error of a factored run is the
 // travel time's, the same as the final one after the last stage; a viscosity list changes ε
-// from stage to stage.
+// from stage to stage, and so does a viscosity_form list; the concave form counts negative
+// Laplacians only.
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
@@ -112,35 +113,98 @@ equation:
   factored: )") + factored + R"(
 training: {batch: {interior: 64, boundary: 64, source: 1}}
 )");
-    // The viscous term (Laplacian stream).
-    check_pde_adjoint(std::string(R"(
+    // The viscous term (Laplacian stream), both forms.
+    for (const char* form : {"laplacian", "concave"}) {
+      SCOPED_TRACE(form);
+      check_pde_adjoint(std::string(R"(
 problem: eikonal
 domain: {lower: [0, 0], upper: [1, 1]}
 equation:
   source: [0.5, 0.25]
   layers: {axis: y, interface: 0.5, speeds: [1, 2]}
   viscosity: 0.05
-  factored: )") + factored + R"(
+  viscosity_form: )") + form + R"(
+  factored: )" + factored + R"(
 training: {batch: {interior: 64, boundary: 64, source: 1}}
 )");
+    }
   }
 }
 
-// A viscosity list gives ε per stage: the residual follows begin_stage, and before any call
-// it is the last stage's (what the outputs after training use).
-TEST(Eikonal, ViscosityPerStage) {
-  const RunSetup setup = load_run(write_config("viscosity_stages", R"(
+// `viscosity_form: concave`: the term is ε min(0, Δu), with the whole Laplacian of
+// u = T₀ (1 + τ) when factored, ΔT₀ = 1/(v₀ r) in 2D included; its adjoint is zero where
+// Δu ≥ 0.
+TEST(Eikonal, ConcaveViscosityCountsNegativeLaplaciansOnly) {
+  for (const bool factored : {false, true}) {
+    SCOPED_TRACE(factored);
+    const RunSetup setup = load_run(write_config("concave", std::string(R"(
 problem: eikonal
 domain: {lower: [0, 0], upper: [1, 1]}
-equation: {source: [0.5, 0.25], speed: "1", factored: false, viscosity: [0.5, 0]}
+equation: {source: [0.5, 0.25], speed: "2", viscosity: 0.1, viscosity_form: Concave, factored: )") +
+                                                        (factored ? "true" : "false") + R"(}
+training: {batch: {interior: 16, boundary: 16, source: 1}}
+)"), {});
+    const LossTerm pde = setup.problem->loss_terms().at(0);
+    const autodiff::StreamLayout layout(pde.spec);
+    Eigen::MatrixXd x(2, 2);
+    x << 0.8, 0.65, 0.2, 0.1;
+    const auto residual = pde.residual(x);
+    autodiff::Streams<double> out;
+    out.resize(2, layout.count(), 1);
+    out.data.setZero();
+    const double v0 = 2, tau = 0.25, grad_tau[2] = {0.3, -0.2};
+    out.stream(autodiff::StreamLayout::value()).setConstant(tau);
+    out.stream(layout.tangent(0)).setConstant(grad_tau[0]);
+    out.stream(layout.tangent(1)).setConstant(grad_tau[1]);
+    for (const double stream_laplacian : {-40.0, 3.0}) {
+      SCOPED_TRACE(stream_laplacian);
+      out.stream(layout.op(0)).setConstant(stream_laplacian);
+      Eigen::MatrixXd r;
+      residual->evaluate(0, layout, out, r);
+      Eigen::MatrixXd r_bar = Eigen::MatrixXd::Ones(2, 1);
+      autodiff::Streams<double> adjoint;
+      adjoint.resize(2, layout.count(), 1);
+      adjoint.data.setZero();
+      residual->backward(0, layout, out, r_bar, adjoint);
+      for (Eigen::Index p = 0; p < 2; ++p) {
+        const double ex = x(p, 0) - 0.5, ey = x(p, 1) - 0.25, dist = std::hypot(ex, ey);
+        const double t0 = dist / v0, gx = ex / (dist * v0), gy = ey / (dist * v0);
+        double grad_norm, laplacian;
+        if (factored) {
+          grad_norm = std::hypot((1 + tau) * gx + t0 * grad_tau[0], (1 + tau) * gy + t0 * grad_tau[1]);
+          laplacian = (1 + tau) / (v0 * dist) + 2 * (gx * grad_tau[0] + gy * grad_tau[1]) +
+                      t0 * stream_laplacian;
+        } else {
+          grad_norm = std::hypot(grad_tau[0], grad_tau[1]);
+          laplacian = stream_laplacian;
+        }
+        EXPECT_NEAR(r(p, 0), grad_norm - 1 / v0 - 0.1 * std::min(0.0, laplacian), 1e-13);
+        const double laplacian_adjoint = adjoint.stream(layout.op(0))(p, 0);
+        if (laplacian < 0)
+          EXPECT_NEAR(laplacian_adjoint, -0.1 * (factored ? t0 : 1.0), 1e-13);
+        else
+          EXPECT_EQ(laplacian_adjoint, 0);
+      }
+    }
+  }
+}
+
+// The "pde" residuals of a two-stage config at 8 points with |∇u| = 1 and Δu = 2 (plain
+// form): before any begin_stage call, then in stage 0 and stage 1.
+std::vector<Eigen::MatrixXd> residuals_per_stage(const std::string& name,
+                                                 const std::string& equation) {
+  const RunSetup setup = load_run(write_config(name, R"(
+problem: eikonal
+domain: {lower: [0, 0], upper: [1, 1]}
+equation: )" + equation + R"(
 training:
   batch: {interior: 16, boundary: 16, source: 1}
   stages: [{optimizer: adam, steps: 1}, {optimizer: adam, steps: 1}]
 )"), {});
   LossTerm pde = setup.problem->loss_terms().at(0);
-  ASSERT_TRUE(static_cast<bool>(pde.begin_stage));
+  EXPECT_TRUE(static_cast<bool>(pde.begin_stage));
   const autodiff::StreamLayout layout(pde.spec);
-  ASSERT_EQ(layout.operators(), 1);  // the Laplacian stream, for the viscous stage
+  EXPECT_EQ(layout.operators(), 1);  // the Laplacian stream, for the viscous stage
   Random sampler(2);
   const Eigen::MatrixXd x = pde.sample(sampler, 8);
   autodiff::Streams<double> out;
@@ -149,15 +213,34 @@ training:
   out.stream(layout.tangent(0)).setConstant(0.6);
   out.stream(layout.tangent(1)).setConstant(0.8);  // |∇u| = 1
   out.stream(layout.op(0)).setConstant(2.0);       // Δu = 2
-  Eigen::MatrixXd r;
-  pde.residual(x)->evaluate(0, layout, out, r);
-  EXPECT_NEAR(r.cwiseAbs().maxCoeff(), 0, 1e-15);  // last stage: ε = 0
-  pde.begin_stage(0);
-  pde.residual(x)->evaluate(0, layout, out, r);
-  for (Eigen::Index p = 0; p < 8; ++p) EXPECT_NEAR(r(p, 0), -0.5 * 2.0, 1e-15);
-  pde.begin_stage(1);
-  pde.residual(x)->evaluate(0, layout, out, r);
-  EXPECT_NEAR(r.cwiseAbs().maxCoeff(), 0, 1e-15);
+  std::vector<Eigen::MatrixXd> r(3);
+  pde.residual(x)->evaluate(0, layout, out, r[0]);
+  for (int stage = 0; stage < 2; ++stage) {
+    if (pde.begin_stage) pde.begin_stage(stage);
+    pde.residual(x)->evaluate(0, layout, out, r[stage + 1]);
+  }
+  return r;
+}
+
+// A viscosity list gives ε per stage: the residual follows begin_stage, and before any call
+// it is the last stage's (what the outputs after training use).
+TEST(Eikonal, ViscosityPerStage) {
+  const auto r = residuals_per_stage(
+      "viscosity_stages", R"({source: [0.5, 0.25], speed: "1", factored: false, viscosity: [0.5, 0]})");
+  EXPECT_NEAR(r[0].cwiseAbs().maxCoeff(), 0, 1e-15);  // last stage: ε = 0
+  for (Eigen::Index p = 0; p < 8; ++p) EXPECT_NEAR(r[1](p, 0), -0.5 * 2.0, 1e-15);
+  EXPECT_NEAR(r[2].cwiseAbs().maxCoeff(), 0, 1e-15);
+}
+
+// A viscosity_form list gives the form per stage: with Δu = 2 > 0 the concave stage has no
+// viscous term, the laplacian one has.
+TEST(Eikonal, ViscosityFormPerStage) {
+  const auto r = residuals_per_stage(
+      "viscosity_form_stages",
+      R"({source: [0.5, 0.25], speed: "1", viscosity: 0.5, viscosity_form: [laplacian, concave]})");
+  EXPECT_NEAR(r[0].cwiseAbs().maxCoeff(), 0, 1e-15);  // last stage: concave
+  for (Eigen::Index p = 0; p < 8; ++p) EXPECT_NEAR(r[1](p, 0), -0.5 * 2.0, 1e-15);
+  EXPECT_NEAR(r[2].cwiseAbs().maxCoeff(), 0, 1e-15);
 }
 
 TEST(Eikonal, SourceTermAndFactoredExact) {
@@ -401,6 +484,25 @@ training: {batch: {interior: 64, source: 1}, stages: [{optimizer: adam, steps: 1
   } catch (const io::ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("viscosity"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("one value per training stage (2)"), std::string::npos) << e.what();
+  }
+  for (const auto& [form, message] :
+       {std::pair{"viscous", "expected one of laplacian, concave; got 'viscous'"},
+        std::pair{"[concave, upwind]", "expected one of laplacian, concave; got 'upwind'"},
+        std::pair{"[concave]", "one value per training stage (2)"}}) {
+    SCOPED_TRACE(form);
+    try {
+      load_run(write_config("viscosity_form", std::string(R"(
+problem: eikonal
+domain: {lower: [0, 0], upper: [1, 1]}
+equation: {source: [0.5, 0.5], speed: "1", viscosity: 0.01, viscosity_form: )") + form + R"(}
+training: {batch: {interior: 64, source: 1}, stages: [{optimizer: adam, steps: 1}, {optimizer: adam, steps: 1}]}
+)"), {});
+      ADD_FAILURE() << "accepted";
+    } catch (const io::ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find("viscosity_form"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(":4:"), std::string::npos) << e.what();  // line 4
+    }
   }
   EXPECT_THROW(load_run(write_config("negative_viscosity", R"(
 problem: eikonal
