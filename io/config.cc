@@ -49,6 +49,15 @@ std::string join(const std::vector<std::string>& items) {
   return out.empty() ? "none" : out;
 }
 
+// The entry of `choices` that `value` names, case-insensitively; "" with `message` set if none.
+std::string match_choice(const std::string& value, const std::vector<std::string>& choices,
+                         std::string& message) {
+  for (const std::string& choice : choices)
+    if (to_lower(choice) == to_lower(value)) return choice;
+  message = "expected one of " + join(choices) + "; got '" + value + "'";
+  return "";
+}
+
 std::string join_key(const std::string& path, std::string_view key) {
   return path.empty() ? std::string(key) : path + "." + std::string(key);
 }
@@ -417,17 +426,17 @@ T ConfigNode::get_in_range(std::string_view key, T lowest, T highest) const {
 
 std::string ConfigNode::get_choice(std::string_view key,
                                    const std::vector<std::string>& choices) const {
-  const std::string value = get<std::string>(key);
-  for (const std::string& choice : choices)
-    if (to_lower(choice) == to_lower(value)) return choice;
-  throw error(key, "expected one of " + join(choices) + "; got '" + value + "'");
+  std::string message;
+  std::string choice = match_choice(get<std::string>(key), choices, message);
+  if (!message.empty()) throw error(key, message);
+  return choice;
 }
 
 std::string ConfigNode::as_choice(const std::vector<std::string>& choices) const {
-  const std::string value = as<std::string>();
-  for (const std::string& choice : choices)
-    if (to_lower(choice) == to_lower(value)) return choice;
-  throw error("expected one of " + join(choices) + "; got '" + value + "'");
+  std::string message;
+  std::string choice = match_choice(as<std::string>(), choices, message);
+  if (!message.empty()) throw error(message);
+  return choice;
 }
 
 std::string ConfigNode::get_choice(std::string_view key, const std::vector<std::string>& choices,

@@ -24,16 +24,13 @@
 
 #include "solvers/run.h"
 #include "solvers/trainer.h"
+#include "tests/testing/scratch.h"
 
 namespace nfield::solvers {
 namespace {
 
 std::filesystem::path write_config(const std::string& name, const std::string& text) {
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "nfield_eikonal_test";
-  std::filesystem::create_directories(dir);
-  const std::filesystem::path path = dir / (name + ".yaml");
-  std::ofstream(path) << text;
-  return path;
+  return testutil::write_config("eikonal", text, name);
 }
 
 double uniform(std::mt19937_64& rng, double lo, double hi) {

@@ -18,6 +18,7 @@
 #include "solvers/hard_constraints.h"
 #include "solvers/run.h"
 #include "solvers/trainer.h"
+#include "tests/testing/scratch.h"
 
 namespace nfield::solvers {
 namespace {
@@ -307,11 +308,7 @@ TEST(HardConstraints, TaylorStreamsAreRejected) {
 }
 
 std::filesystem::path write_config(const std::string& name, const std::string& text) {
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "nfield_hard_test";
-  std::filesystem::create_directories(dir);
-  const std::filesystem::path path = dir / (name + ".yaml");
-  std::ofstream(path) << text;
-  return path;
+  return testutil::write_config("hard_constraints", text, name);
 }
 
 const char* kWaveHead = R"yaml(

@@ -15,6 +15,7 @@
 
 #include "solvers/run.h"
 #include "solvers/trainer.h"
+#include "tests/testing/scratch.h"
 
 namespace nfield::solvers {
 namespace {
@@ -102,11 +103,7 @@ autodiff::Streams<double> analytic_streams(const autodiff::StreamLayout& layout,
 }
 
 std::filesystem::path write_config(const std::string& name, const std::string& text) {
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "nfield_wave_test";
-  std::filesystem::create_directories(dir);
-  const std::filesystem::path path = dir / (name + ".yaml");
-  std::ofstream(path) << text;
-  return path;
+  return testutil::write_config("wave", text, name);
 }
 
 const LossTerm& term_named(const std::vector<LossTerm>& terms, const std::string& prefix) {
