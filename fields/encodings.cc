@@ -68,6 +68,12 @@ void EncodingOptions::validate() const {
         throw std::invalid_argument("encoding.at = " + std::to_string(c) + ": must be finite");
   if (kind == "cusp" && axis < 0)
     throw std::invalid_argument("encoding.axis = " + std::to_string(axis) + ": must be >= 0");
+  if (from_stage < 0)
+    throw std::invalid_argument("encoding.from_stage = " + std::to_string(from_stage) +
+                                ": must be >= 0");
+  if (from_stage > 0 && kind != "cusp")
+    throw std::invalid_argument("encoding.from_stage = " + std::to_string(from_stage) +
+                                ": only cusp features can enter at a later stage");
 }
 
 Eigen::MatrixXd encoding_matrix(const EncodingOptions& options, int input_dim) {
@@ -120,6 +126,14 @@ void FeatureEncoding<Scalar>::forward(const autodiff::StreamLayout& layout, cons
                                       const autodiff::Streams<Scalar>& in,
                                       autodiff::Streams<Scalar>& out,
                                       autodiff::SavedTensors<Scalar>* saved) const {
+  const Eigen::Index d = include_input_ ? in.width() : 0;
+  if (!features_on_) {
+    out.resize(in.points, in.count, d + weights_.rows());
+    if (d > 0) out.data.leftCols(d) = in.data;
+    out.data.rightCols(weights_.rows()).setZero();
+    if (saved) saved->clear();
+    return;
+  }
   thread_local autodiff::Streams<Scalar> z, y;
   thread_local std::vector<autodiff::Matrix<Scalar>> tables;
   z.resize(in.points, in.count, weights_.rows());
@@ -128,7 +142,6 @@ void FeatureEncoding<Scalar>::forward(const autodiff::StreamLayout& layout, cons
   const int order = layout.forward_order() + (saved ? 1 : 0);
   function_->derivatives(z.stream(0), order, tables);
   autodiff::elementwise_forward(layout, tables, z, y);
-  const Eigen::Index d = include_input_ ? in.width() : 0;
   out.resize(in.points, in.count, d + y.width());
   if (d > 0) out.data.leftCols(d) = in.data;
   out.data.rightCols(y.width()) = y.data;
@@ -146,13 +159,21 @@ void FeatureEncoding<Scalar>::backward(const autodiff::StreamLayout& layout, con
                                        autodiff::Streams<Scalar>& out_adjoint, Scalar*,
                                        autodiff::Streams<Scalar>* in_adjoint) const {
   if (!in_adjoint) return;
+  const Eigen::Index d = include_input_ ? in.width() : 0;
+  if (!features_on_) {
+    in_adjoint->resize(in.points, in.count, in.width());
+    if (d > 0)
+      in_adjoint->data = out_adjoint.data.leftCols(d);
+    else
+      in_adjoint->data.setZero();
+    return;
+  }
   thread_local autodiff::Streams<Scalar> z, y_adjoint, z_adjoint;
   thread_local std::vector<autodiff::Matrix<Scalar>> tables;
   z.points = in.points;
   z.count = in.count;
   z.data = saved[0];
   tables.assign(saved.begin() + 1, saved.end());
-  const Eigen::Index d = include_input_ ? in.width() : 0;
   y_adjoint.resize(in.points, in.count, weights_.rows());
   y_adjoint.data = out_adjoint.data.rightCols(weights_.rows());
   autodiff::elementwise_backward(layout, tables, z, y_adjoint, z_adjoint);

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "fields/field.h"
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <stdexcept>
@@ -71,6 +72,8 @@ Field<Scalar>::Field(FieldOptions options, autodiff::SequentialOptions evaluatio
   Eigen::Index width = d;
   if (auto encoding = make_encoding<Scalar>(options_.encoding, d)) {
     width = encoding->output_width();
+    if (options_.encoding.from_stage > 0)
+      late_features_ = dynamic_cast<FeatureEncoding<Scalar>*>(encoding.get());
     network_.add(std::move(encoding));
   }
   const bool siren = is_siren(options_);
@@ -107,8 +110,18 @@ void Field<Scalar>::initialize() {
     for (Eigen::Index i = 0; i < in * out; ++i) p[i] = static_cast<Scalar>(uniform(rng, weight_bound));
     for (Eigen::Index i = 0; i < out; ++i)
       p[in * out + i] = static_cast<Scalar>(bias_bound > 0 ? uniform(rng, bias_bound) : 0.0);
+    if (dense_index == 0 && late_features_) {
+      // W is out × in column-major (fields/dense.h); the features follow the d inputs.
+      const Eigen::Index d = options_.input_dim;
+      std::fill(p + d * out, p + in * out, Scalar(0));
+    }
     ++dense_index;
   }
+}
+
+template <typename Scalar>
+void Field<Scalar>::begin_stage(int stage) {
+  if (late_features_) late_features_->set_features_on(stage >= options_.encoding.from_stage);
 }
 
 template <typename Scalar>

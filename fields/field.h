@@ -58,8 +58,13 @@ class Field {
   const autodiff::Sequential<Scalar>& network() const { return network_; }
   autodiff::Sequential<Scalar>& network() { return network_; }
 
-  // Draws θ from the initialization of `options().type` with `options().seed`.
+  // Draws θ from the initialization of `options().type` with `options().seed`; the first
+  // layer's weights on cusp features that enter late (encoding.from_stage > 0) are zero.
   void initialize();
+
+  // Training stage `stage` (0-based) begins: cusp features that enter at a later stage are
+  // switched off until then (fields/encodings.h). A field nobody calls this on has them on.
+  void begin_stage(int stage);
 
   // Output streams at x (N × d), at the field's own parameters.
   void evaluate(const autodiff::StreamLayout& layout, const Eigen::Ref<const autodiff::Matrix<Scalar>>& x,
@@ -78,6 +83,7 @@ class Field {
   Eigen::MatrixXd encoding_matrix_;
   autodiff::Sequential<Scalar> network_;
   autodiff::Vector<Scalar> parameters_;
+  fields::FeatureEncoding<Scalar>* late_features_ = nullptr;  // in network_; set if from_stage > 0
 };
 
 }  // namespace nfield::fields

@@ -53,6 +53,7 @@ FieldOptions field_options_from_config(const io::ConfigNode& node, int input_dim
       o.encoding.at = e.get<std::vector<double>>("at");
       e.require("at", !o.encoding.at.empty(), "expected a non-empty list of plane positions");
       for (double c : o.encoding.at) e.require("at", std::isfinite(c), "expected finite numbers");
+      if (e.has("from_stage")) o.encoding.from_stage = e.get_in_range("from_stage", 0, 1000);
     }
     e.reject_unknown_keys();
   }
@@ -84,6 +85,7 @@ YAML::Node to_yaml(const FieldOptions& o, std::vector<std::string> input_names) 
   } else if (o.encoding.type == "cusp") {
     n["encoding"]["axis"] = names_or_default(std::move(input_names), o.input_dim).at(o.encoding.axis);
     n["encoding"]["at"] = o.encoding.at;
+    if (o.encoding.from_stage > 0) n["encoding"]["from_stage"] = o.encoding.from_stage;
   }
   return n;
 }

@@ -11,6 +11,7 @@
 //     seed: 0                 # default: training.seed
 //     encoding: {type: fourier, features: 128, scale: 10}   # identity | positional | fourier | cusp
 //     encoding: {type: cusp, axis: y, at: [0.5]}             # |y − 0.5| as an extra input
+//     encoding: {type: cusp, axis: y, at: [0.5], from_stage: 1}   # … from training stage 1
 #pragma once
 
 #include <yaml-cpp/yaml.h>

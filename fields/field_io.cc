@@ -31,6 +31,7 @@ void save_field(io::H5Writer& file, const Field<Scalar>& field, const std::strin
   if (Registry<int>::lower(o.encoding.type) == "cusp") {
     file.write_attribute(group, "encoding_axis", o.encoding.axis);
     file.write_attribute(group, "encoding_at", std::span<const double>(o.encoding.at));
+    file.write_attribute(group, "encoding_from_stage", static_cast<std::int64_t>(o.encoding.from_stage));
   }
   if (field.encoding_matrix().rows() > 0) file.write(group + "/encoding", field.encoding_matrix());
   const auto& modules = field.network().modules();
@@ -66,6 +67,9 @@ FieldOptions load_field_options(const io::H5Reader& file, const std::string& gro
     o.encoding.axis = static_cast<int>(file.read_attribute<std::int64_t>(group, "encoding_axis"));
   if (file.has_attribute(group, "encoding_at"))
     o.encoding.at = file.read_attribute<std::vector<double>>(group, "encoding_at");
+  if (file.has_attribute(group, "encoding_from_stage"))
+    o.encoding.from_stage =
+        static_cast<int>(file.read_attribute<std::int64_t>(group, "encoding_from_stage"));
   return o;
 }
 

@@ -298,6 +298,11 @@ RunSetup load_run(const std::filesystem::path& config, const std::vector<std::st
                                               s.problem->domain().input_dim(),
                                               s.problem->output_dim(), s.training.seed,
                                               s.problem->domain().input_names());
+  const auto stages = static_cast<int>(s.training.stages.size());
+  if (s.field.encoding.from_stage > 0 && s.field.encoding.from_stage >= stages)
+    throw s.root.child("field").child("encoding").error(
+        "from_stage", "expected a stage index below the number of training stages, " +
+                          std::to_string(stages) + ", or the features would never enter");
   s.output = output_options(s.root.child_or_empty("output"), s.problem->domain(), config,
                             out_dir_override);
   // The batch keys are the problem's loss-term kinds: a misspelled one is an error, and the

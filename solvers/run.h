@@ -40,12 +40,12 @@ struct OutputOptions {
 struct RunSetup {
   std::filesystem::path config_path;
   io::ConfigNode root;
-  std::unique_ptr<Problem> problem;
-  fields::FieldOptions field;
-  TrainingOptions training;
-  OutputOptions output;
-  YAML::Node resolved;  // the config with defaults filled in
-  std::filesystem::path data_dir;  // relative data paths resolve here (the config's folder)
+  std::unique_ptr<Problem> problem{};
+  fields::FieldOptions field{};
+  TrainingOptions training{};
+  OutputOptions output{};
+  YAML::Node resolved{};  // the config with defaults filled in
+  std::filesystem::path data_dir{};  // relative data paths resolve here (the config's folder)
 };
 
 // Reads and checks a config (and `--set` overrides). Throws io::ConfigError. Relative data

@@ -134,6 +134,7 @@ Eigen::VectorXd Trainer<Scalar>::squared_residuals(size_t k, const Eigen::Matrix
 
 template <typename Scalar>
 void Trainer<Scalar>::begin_stage() {
+  field_.begin_stage(stage_);
   for (size_t k = 0; k < terms_.size(); ++k) {
     if (!terms_[k].begin_stage) continue;
     terms_[k].begin_stage(stage_);

@@ -107,7 +107,8 @@ class Trainer {
   double term_loss(size_t k, const Scalar* params, double weight, Scalar* gradient);
   Eigen::VectorXd squared_residuals(size_t k, const Eigen::MatrixXd& x, const Residual& r) const;
   void refine();
-  // Tells the terms that stage_ starts and rebuilds the residuals of those that listen.
+  // Tells the field and the terms that stage_ starts and rebuilds the residuals of the terms
+  // that listen.
   void begin_stage();
   // Iterations per segment of a Ceres stage (one problem for Ceres): the whole stage, or
   // fewer where the point set changes (resample_every, adaptive.every) or, with_causal, the

@@ -41,6 +41,7 @@ void expect_round_trip(const FieldOptions& options, const std::string& name) {
   if (options.encoding.type == "cusp") {
     EXPECT_EQ(o.encoding.axis, options.encoding.axis);
     EXPECT_EQ(o.encoding.at, options.encoding.at);
+    EXPECT_EQ(o.encoding.from_stage, options.encoding.from_stage);
   }
   // Layout: layer 0 weight is (hidden[0], encoded input width).
   const auto shape = file.shape("field/layers/0/weight");
@@ -62,6 +63,7 @@ TEST(FieldIo, RoundTripIsBitExactForEveryEncodingAndPrecision) {
     options.encoding.features = 5;
     options.encoding.axis = 1;
     options.encoding.at = {-0.25, 0.5};
+    options.encoding.from_stage = encoding == "cusp" ? 2 : 0;
     expect_round_trip<float>(options, encoding + "_float.h5");
     expect_round_trip<double>(options, encoding + "_double.h5");
   }

@@ -127,6 +127,64 @@ TEST(FieldCast, FloatToDoubleMatches) {
   EXPECT_EQ(back.parameters(), f.parameters());
 }
 
+// Cusp features with `from_stage: 2`: their first-layer weights start at zero (the other
+// parameters as drawn without from_stage); before stage 2 they are switched off, so those
+// weights get exactly zero gradients and do not change the field's values; from stage 2 on
+// they are trained like any other weight.
+TEST(LateCuspFeatures, ZeroWeightsAndNoGradientBeforeTheirStage) {
+  FieldOptions o;
+  o.type = "mlp";
+  o.activation = "tanh";
+  o.hidden = {6, 5};
+  o.encoding.type = "cusp";
+  o.encoding.axis = 1;
+  o.encoding.at = {0.5};
+  const Field<double> from_start(o);
+  o.encoding.from_stage = 2;
+  Field<double> f(o);
+  const DenseSlice first = dense_slices(f).at(0);
+  ASSERT_EQ(first.in, 3);  // x, y, |y − 0.5|
+  // W is out × in column-major: the cusp column is the last `out` entries of the weights.
+  const Eigen::Index cusp_begin = first.offset + 2 * first.out, cusp_end = first.offset + 3 * first.out;
+  for (Eigen::Index i = 0; i < f.parameter_count(); ++i) {
+    if (i >= cusp_begin && i < cusp_end)
+      EXPECT_EQ(f.parameters()(i), 0) << i;
+    else
+      EXPECT_EQ(f.parameters()(i), from_start.parameters()(i)) << i;
+  }
+
+  std::mt19937_64 rng(4);
+  const Eigen::MatrixXd x = random_matrix(30, 2, rng);
+  const autodiff::StreamLayout layout(autodiff::StreamSpec::laplacian(2));
+  auto gradient_of = [&](const Field<double>& field) {
+    autodiff::Streams<double> out;
+    field.evaluate(layout, x, out);
+    const testutil::SquaresLoss<double> loss(testutil::SquaresLoss<double>::balanced_weights(out));
+    Eigen::VectorXd g = Eigen::VectorXd::Zero(field.parameter_count());
+    field.network().value_and_gradient(field.parameters().data(), layout, x, loss, g.data());
+    return g;
+  };
+  // Nonzero cusp weights, so that a switched-on feature would show in values and gradients.
+  for (Eigen::Index i = cusp_begin; i < cusp_end; ++i) f.parameters()(i) = 0.3;
+  Field<double> without = Field<double>(o);  // the same weights with the cusp column at zero
+  without.parameters() = f.parameters();
+  without.parameters().segment(cusp_begin, cusp_end - cusp_begin).setZero();
+  for (const int stage : {0, 1}) {
+    f.begin_stage(stage);
+    EXPECT_EQ(f.values(x), without.values(x)) << "stage " << stage;
+    const Eigen::VectorXd g = gradient_of(f);
+    EXPECT_EQ(g.segment(cusp_begin, cusp_end - cusp_begin).norm(), 0) << "stage " << stage;
+    EXPECT_GT(g.head(cusp_begin).norm(), 0);
+  }
+  f.begin_stage(2);
+  EXPECT_GT((f.values(x) - without.values(x)).norm(), 1e-3);
+  EXPECT_GT(gradient_of(f).segment(cusp_begin, cusp_end - cusp_begin).norm(), 0);
+  f.begin_stage(0);
+  const Eigen::MatrixXd off = f.values(x);
+  f.begin_stage(5);
+  EXPECT_NE(f.values(x), off);
+}
+
 // A SIREN with hidden [64, 64] (ω₀ = 30) in float against the same parameters in double:
 // every stream within float rounding, relative to its own scale.
 TEST(FloatStreams, MatchDoubleWithinFloatRounding) {

@@ -109,6 +109,14 @@ TEST(EncodingOptions, ValidationNamesTheField) {
   FieldOptions f;
   f.encoding = o;
   EXPECT_NE(message_of([&] { f.validate(); }).find("encoding.axis"), std::string::npos);
+  o.axis = 1;
+  o.from_stage = -1;
+  EXPECT_NE(message_of([&] { o.validate(); }).find("encoding.from_stage = -1: must be >= 0"),
+            std::string::npos);
+  o.from_stage = 1;
+  EXPECT_NO_THROW(o.validate());
+  o.type = "fourier";
+  EXPECT_NE(message_of([&] { o.validate(); }).find("only cusp features"), std::string::npos);
 }
 
 // Cusp features: [x, |x_a − c_k|] with value, sign derivative and no curvature, by hand.

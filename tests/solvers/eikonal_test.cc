@@ -7,11 +7,14 @@
 // factored run learns the constant-speed cone; the per-stage error of a factored run is the
 // travel time's, the same as the final one after the last stage; a viscosity list changes ε
 // from stage to stage, and so does a viscosity_form list; the concave form counts negative
-// Laplacians only.
+// Laplacians only; the interface term is zero for the exact two-layer field and penalizes an
+// interface that emits waves into the source's layer faster than the far layer carries
+// them; cusp features with from_stage stay at zero through the stages before it.
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -19,6 +22,7 @@
 #include <functional>
 #include <limits>
 #include <random>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -31,6 +35,13 @@ namespace {
 
 std::filesystem::path write_config(const std::string& name, const std::string& text) {
   return testutil::write_config("eikonal", text, name);
+}
+
+const LossTerm& term_named(const std::vector<LossTerm>& terms, const std::string& name) {
+  const auto term = std::find_if(terms.begin(), terms.end(),
+                                 [&](const LossTerm& t) { return t.name == name; });
+  if (term == terms.end()) throw std::logic_error("no loss term " + name);
+  return *term;
 }
 
 double uniform(std::mt19937_64& rng, double lo, double hi) {
@@ -110,6 +121,28 @@ equation:
   factored: )") + factored + R"(
 training: {batch: {interior: 64, boundary: 64, source: 1}}
 )");
+    // The interface term, source below and above the plane.
+    for (const char* source : {"[0.5, 0.25]", "[0.4, 0.7]"}) {
+      SCOPED_TRACE(source);
+      const RunSetup setup = load_run(write_config("interface_adjoint", std::string(R"(
+problem: eikonal
+domain: {lower: [0, 0], upper: [1, 1]}
+equation:
+  source: )") + source + R"(
+  layers: {axis: y, interface: 0.5, speeds: [1, 2]}
+  interface_weight: 1
+  factored: )" + factored + R"(
+training: {batch: {interior: 64, boundary: 64, source: 1, interface: 24}}
+)"), {});
+      const std::vector<LossTerm> terms = setup.problem->loss_terms();
+      const LossTerm& interface = term_named(terms, "interface");
+      Random sampler(4);
+      const auto residual = interface.residual(interface.sample(sampler, 24));
+      const autodiff::StreamLayout layout(interface.spec);
+      std::mt19937_64 rng(6);
+      check_adjoint(*residual, layout, 0, 24, rng);
+      check_adjoint(*residual, layout, 8, 16, rng);
+    }
     // The viscous term (Laplacian stream), both forms.
     for (const char* form : {"laplacian", "concave"}) {
       SCOPED_TRACE(form);
@@ -451,6 +484,71 @@ TEST(Eikonal, LayeredExactSolvesTheEikonalEquation) {
   }
 }
 
+// Interface points lie on the source's side of the plane, 1e-6 of the box off it. For the
+// exact travel time (plain form, streams by hand) the term is zero on both of its branches:
+// waves that cross the interface (∂u/∂n > 0) and the head wave (∂u/∂n < 0, tangential
+// slowness 1/v_far). A field whose interface emits into the source's layer with a
+// tangential slowness below 1/v_far (an interface "faster" than the far layer) is penalized
+// by |∂u/∂n| (1/v_far − |∇_t u|).
+TEST(Eikonal, InterfaceTermPenalizesAnInterfaceFasterThanTheFarLayer) {
+  const RunSetup setup = load_run(write_config("interface", R"(
+problem: eikonal
+domain: {lower: [0, 0], upper: [1, 1]}
+equation:
+  source: [0.5, 0.25]
+  layers: {axis: y, interface: 0.5, speeds: [1, 2]}
+  interface_weight: 1
+training: {batch: {interior: 64, boundary: 16, source: 1, interface: 200}}
+)"), {});
+  const auto terms = setup.problem->loss_terms();
+  const LossTerm& interface = term_named(terms, "interface");
+  EXPECT_EQ(interface.batch_key, "interface");
+  Random rng(3);
+  const Eigen::MatrixXd x = interface.sample(rng, 200);
+  for (Eigen::Index p = 0; p < x.rows(); ++p) {
+    EXPECT_DOUBLE_EQ(x(p, 1), 0.5 - 1e-6);
+    EXPECT_TRUE(x(p, 0) >= 0 && x(p, 0) <= 1);
+  }
+  const autodiff::StreamLayout layout(interface.spec);
+  const double far = 0.5;  // 1/v above the plane
+  // Streams of a field with gradient g at every point.
+  auto residuals = [&](const std::function<Eigen::Vector2d(double)>& g) {
+    autodiff::Streams<double> out;
+    out.resize(x.rows(), layout.count(), 1);
+    out.data.setZero();
+    for (Eigen::Index p = 0; p < x.rows(); ++p)
+      for (int a = 0; a < 2; ++a) out.stream(layout.tangent(a))(p, 0) = g(x(p, 0))(a);
+    Eigen::MatrixXd r;
+    interface.residual(x)->evaluate(0, layout, out, r);
+    return r;
+  };
+  // The exact first arrival just below the plane, by finite differences of the built-in one.
+  const double h = 1e-7;
+  auto exact_gradient = [&](double xp) {
+    auto t = [&](double a, double b) {
+      return setup.problem->exact((Eigen::MatrixXd(1, 2) << a, b).finished())(0, 0);
+    };
+    const double y = 0.5 - 1e-6;
+    return Eigen::Vector2d((t(xp + h, y) - t(xp - h, y)) / (2 * h),
+                           (t(xp, y + h / 10) - t(xp, y - h / 10)) / (h / 5));
+  };
+  const Eigen::MatrixXd exact = residuals(exact_gradient);
+  EXPECT_LT(exact.cwiseAbs().maxCoeff(), 1e-6);
+  int head = 0;  // points where the exact field leaves the interface downwards
+  for (Eigen::Index p = 0; p < x.rows(); ++p) head += exact_gradient(x(p, 0))(1) < 0;
+  EXPECT_GT(head, 40);
+  EXPECT_LT(head, 160);
+  // A head wave whose tangential slowness is 0.4 < 1/2: r = 0.9165 · (0.5 − 0.4) everywhere.
+  const double normal = std::sqrt(1 - 0.4 * 0.4);
+  const Eigen::MatrixXd fast = residuals([&](double xp) {
+    return Eigen::Vector2d(xp > 0.5 ? 0.4 : -0.4, -normal);
+  });
+  for (Eigen::Index p = 0; p < x.rows(); ++p) EXPECT_NEAR(fast(p, 0), normal * (far - 0.4), 1e-15);
+  // The same field going up through the interface is not the term's business.
+  const Eigen::MatrixXd up = residuals([&](double) { return Eigen::Vector2d(0.4, normal); });
+  EXPECT_EQ(up.cwiseAbs().maxCoeff(), 0);
+}
+
 TEST(Eikonal, ConfigErrors) {
   EXPECT_THROW(load_run(write_config("both", R"(
 problem: eikonal
@@ -499,6 +597,26 @@ training: {batch: {interior: 64, source: 1}, stages: [{optimizer: adam, steps: 1
       EXPECT_NE(std::string(e.what()).find("viscosity_form"), std::string::npos) << e.what();
       EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
       EXPECT_NE(std::string(e.what()).find(":4:"), std::string::npos) << e.what();  // line 4
+    }
+  }
+  for (const auto& [equation, message] :
+       {std::pair{"{source: [0.5, 0.5], speed: \"1\", interface_weight: 1}", "needs `layers`"},
+        std::pair{"{source: [0.5, 0.25], layers: {axis: y, interface: 0.5, speeds: [1, 2]}, "
+                  "interface_weight: -1}",
+                  "expected a weight >= 0"}}) {
+    SCOPED_TRACE(equation);
+    try {
+      load_run(write_config("interface_weight", std::string(R"(
+problem: eikonal
+domain: {lower: [0, 0], upper: [1, 1]}
+equation: )") + equation + R"(
+training: {batch: {interior: 64, source: 1, interface: 8}}
+)"), {});
+      ADD_FAILURE() << "accepted";
+    } catch (const io::ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find("interface_weight"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(":4:"), std::string::npos) << e.what();
     }
   }
   EXPECT_THROW(load_run(write_config("negative_viscosity", R"(
@@ -575,6 +693,62 @@ output: {grid: [17, 17], png: false}
   EXPECT_NE(stages[0]["rel_l2"].get<double>(), stages[1]["rel_l2"].get<double>());
   EXPECT_EQ(stages[1]["rel_l2"].get<double>(), metrics["rel_l2"].get<double>());
   std::filesystem::remove_all(out);
+}
+
+// Cusp features with from_stage: 1 in a two-stage run: through Adam (stage 0) their
+// first-layer weights stay exactly zero while the others train; LM (stage 1) trains them.
+TEST(Eikonal, LateCuspFeaturesEnterAtTheirStage) {
+  const RunSetup setup = load_run(write_config("late_cusp", R"(
+problem: eikonal
+domain: {lower: [0, 0], upper: [1, 1]}
+equation:
+  source: [0.5, 0.25]
+  layers: {axis: y, interface: 0.5, speeds: [1, 2]}
+  factored: true
+  interface_weight: 1
+field: {type: mlp, hidden: [6], activation: tanh, encoding: {type: cusp, axis: y, at: [0.5], from_stage: 1}}
+training:
+  seed: 2
+  precision: double
+  threads: 1
+  batch: {interior: 128, boundary: 32, source: 1, interface: 32}
+  stages:
+    - {optimizer: adam, steps: 30, lr: 1.0e-2}
+    - {optimizer: lm, steps: 5}
+)"), {});
+  fields::Field<double> field(setup.field);
+  const Eigen::VectorXd initial = field.parameters();
+  // The first layer's weights are 6 × 3 column-major; column 2 multiplies |y − 0.5|.
+  auto cusp_weights = [&] { return field.parameters().segment(2 * 6, 6); };
+  ASSERT_EQ(cusp_weights().norm(), 0);
+  std::vector<Eigen::VectorXd> after;
+  Trainer<double> trainer(*setup.problem, field, setup.training);
+  typename Trainer<double>::Callbacks callbacks;
+  callbacks.stage_error = [&] {
+    after.push_back(field.parameters());
+    return 0.0;
+  };
+  ASSERT_TRUE(trainer.run(callbacks));
+  ASSERT_EQ(after.size(), 2u);
+  EXPECT_EQ(after[0].segment(2 * 6, 6).norm(), 0);
+  EXPECT_GT((after[0] - initial).norm(), 1e-2);  // the rest did train
+  EXPECT_GT(after[1].segment(2 * 6, 6).norm(), 0);
+  // from_stage must name a stage the run has.
+  try {
+    load_run(write_config("late_cusp_beyond", R"(
+problem: eikonal
+domain: {lower: [0, 0], upper: [1, 1]}
+equation: {source: [0.5, 0.25], layers: {axis: y, interface: 0.5, speeds: [1, 2]}}
+field: {type: mlp, hidden: [6], encoding: {type: cusp, axis: y, at: [0.5], from_stage: 1}}
+training: {batch: {interior: 64, boundary: 16, source: 1}}
+)"), {});
+    ADD_FAILURE() << "accepted";
+  } catch (const io::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("from_stage"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("number of training stages, 1"), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find(":5:"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace
