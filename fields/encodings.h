@@ -94,7 +94,6 @@ class FeatureEncoding final : public autodiff::Module<Scalar> {
 
   // Switched off, σ(x Wᵀ + b) is replaced by zeros in every stream (x itself is kept).
   void set_features_on(bool on) { features_on_ = on; }
-  bool features_on() const { return features_on_; }
 
  private:
   autodiff::Matrix<Scalar> weights_;  // m × d
