@@ -7,6 +7,7 @@
 #include <exception>
 #include <iostream>
 
+#include "apps/allocator_tuning.h"
 #include "apps/bench_command.h"
 #include "apps/run_commands.h"
 #include "io/config.h"
@@ -14,6 +15,7 @@
 #include "io/version.h"
 
 int main(int argc, char** argv) {
+  nfield::apps::keep_freed_blocks_in_the_heap();
   CLI::App app{"nfield: solve partial differential equations with neural fields"};
   app.set_version_flag("--version", std::string(nfield::version()));
   app.require_subcommand(1);

@@ -1,10 +1,9 @@
 // SPDX-License-Identifier: MIT
 #include "autodiff/sequential.h"
 
-#include <malloc.h>
 #include <omp.h>
 
-#include <mutex>
+#include <algorithm>
 #include <stdexcept>
 #include <string>
 
@@ -20,25 +19,9 @@ struct Sequential<Scalar>::Workspace {
   Matrix<Scalar> r, r_bar;  // residuals_and_jacobian: one block's r and r̄
 };
 
-namespace {
-// Eigen allocates the packing buffers of every matrix product (0.1–2 MB here) on the heap,
-// and glibc's defaults hand such blocks back to the kernel when they are freed (mmap above
-// 128 KiB, heap trimming above 128 KiB), so every product page-faulted its buffers anew: a
-// training process ran 1.7–2× slower per step (laplacian, batch 4096: 140 → 80 ms) until
-// something large had moved glibc's adaptive thresholds. Keeping freed blocks below 32 MiB
-// in the heap costs at most the trim threshold in retained memory.
-void keep_freed_blocks_in_the_heap() {
-  static std::once_flag once;
-  std::call_once(once, [] {
-    mallopt(M_MMAP_THRESHOLD, 32 << 20);
-    mallopt(M_TRIM_THRESHOLD, 128 << 20);
-  });
-}
-}  // namespace
 
 template <typename Scalar>
 Sequential<Scalar>::Sequential(SequentialOptions options) {
-  keep_freed_blocks_in_the_heap();
   set_options(options);
 }
 template <typename Scalar>
@@ -97,69 +80,116 @@ void Sequential<Scalar>::prepare_workspaces(int threads) const {
 
 template <typename Scalar>
 void Sequential<Scalar>::forward_block(const Scalar* params, const StreamLayout& layout,
-                                       const Eigen::Ref<const Matrix<Scalar>>& x,
-                                       Eigen::Index first, Eigen::Index rows, Workspace& ws,
-                                       bool record) const {
-  seed_input_streams<Scalar>(layout, x.middleRows(first, rows), ws.activations[0]);
+                                       const Batch<Scalar>& batch, Eigen::Index first,
+                                       Eigen::Index rows, Workspace& ws, bool record) const {
+  if (batch.tangents) {
+    const Eigen::Ref<const Matrix<Scalar>> tangents = batch.tangents->middleRows(first, rows);
+    seed_input_streams<Scalar>(layout, batch.points.middleRows(first, rows), ws.activations[0],
+                               &tangents);
+  } else {
+    seed_input_streams<Scalar>(layout, batch.points.middleRows(first, rows), ws.activations[0]);
+  }
   for (size_t l = 0; l < modules_.size(); ++l)
     modules_[l]->forward(layout, params + offsets_[l], ws.activations[l], ws.activations[l + 1],
                          record ? &ws.saved[l] : nullptr);
 }
 
+template <typename Scalar>
+std::vector<Eigen::Index> Sequential<Scalar>::block_starts(
+    Eigen::Index n, std::span<const Eigen::Index> groups) const {
+  const Eigen::Index block = options_.block_points;
+  std::vector<Eigen::Index> starts;
+  if (groups.empty()) {
+    for (Eigen::Index first = 0; first < n; first += block) starts.push_back(first);
+    starts.push_back(n);
+    return starts;
+  }
+  if (groups.front() != 0 || groups.back() != n)
+    throw std::invalid_argument("Batch.groups: offsets must run from 0 to the point count " +
+                                std::to_string(n) + ", got " + std::to_string(groups.front()) +
+                                " … " + std::to_string(groups.back()));
+  for (size_t k = 1; k < groups.size(); ++k)
+    if (groups[k] < groups[k - 1])
+      throw std::invalid_argument("Batch.groups: offsets must not decrease (offset " +
+                                  std::to_string(k) + " is " + std::to_string(groups[k]) +
+                                  ", before it " + std::to_string(groups[k - 1]) + ")");
+  starts.push_back(0);
+  for (size_t k = 1; k + 1 < groups.size(); ++k)
+    // Cut before group k when it would make the current block larger than a block.
+    // (Never at N: empty groups at the end stay with the block that ends there.)
+    if (groups[k + 1] - starts.back() > block && groups[k] > starts.back() && groups[k] < n)
+      starts.push_back(groups[k]);
+  starts.push_back(n);
+  return starts;
+}
+
 namespace {
+// Shapes are checked before a parallel region: an exception may not leave one.
+template <typename Scalar>
+void check_batch(const StreamLayout& layout, const Batch<Scalar>& batch, Eigen::Index input_width) {
+  const int d = layout.input_dim();
+  if (batch.points.cols() != d || (input_width > 0 && d != input_width))
+    throw std::invalid_argument("Sequential: points have " + std::to_string(batch.points.cols()) +
+                                " columns, the stream spec expects " + std::to_string(d) +
+                                " and the network " + std::to_string(input_width));
+  if (batch.tangents && (batch.tangents->rows() != batch.points.rows() ||
+                         batch.tangents->cols() != d * layout.tangents()))
+    throw std::invalid_argument("Sequential: per-point tangents are " +
+                                std::to_string(batch.tangents->rows()) + " x " +
+                                std::to_string(batch.tangents->cols()) + ", expected " +
+                                std::to_string(batch.points.rows()) + " x " +
+                                std::to_string(d * layout.tangents()) +
+                                " (points x input_dim * tangents)");
+}
+
 int thread_count(int requested) { return requested > 0 ? requested : omp_get_max_threads(); }
 
 // The blocks already split the work over the threads: each block's matrix products must
-// run on its own thread. Eigen would otherwise open a nested team of its own inside a team
-// of one thread (threads = 1), which costs 3–4× per step.
-class SingleThreadedEigen {
- public:
-  SingleThreadedEigen() : previous_(Eigen::nbThreads()) { Eigen::setNbThreads(1); }
-  ~SingleThreadedEigen() { Eigen::setNbThreads(previous_); }
-
- private:
-  int previous_;
-};
+// run on its own thread. Eigen would otherwise open a nested team inside a team of one
+// thread (threads = 1), which costs 3–4× per step. The thread count set here belongs to the
+// calling thread's task inside the parallel region (OpenMP's nthreads-var is a per-task
+// setting), so nothing outside the region changes and concurrent passes do not race.
+void single_threaded_products_in_this_task() { omp_set_num_threads(1); }
 }  // namespace
 
 template <typename Scalar>
 void Sequential<Scalar>::evaluate(const Scalar* params, const StreamLayout& layout,
-                                  const Eigen::Ref<const Matrix<Scalar>>& x,
-                                  Streams<Scalar>& out) const {
+                                  const Batch<Scalar>& batch, Streams<Scalar>& out) const {
   if (modules_.empty()) throw std::logic_error("Sequential::evaluate: no modules");
-  const Eigen::Index n = x.rows(), block = options_.block_points;
-  const Eigen::Index blocks = (n + block - 1) / block;
+  check_batch(layout, batch, input_width());
+  const Eigen::Index n = batch.points.rows();
+  const std::vector<Eigen::Index> starts = block_starts(n, batch.groups);
+  const auto blocks = static_cast<Eigen::Index>(starts.size()) - 1;
   const int threads = thread_count(options_.threads);
   out.resize(n, layout.count(), output_width());
-  const SingleThreadedEigen single_threaded_products;
   prepare_workspaces(threads);
-#pragma omp parallel for schedule(static) num_threads(threads)
-  for (Eigen::Index b = 0; b < blocks; ++b) {
+#pragma omp parallel num_threads(threads)
+  {
+    single_threaded_products_in_this_task();
     Workspace& ws = workspace(omp_get_thread_num());
-    const Eigen::Index first = b * block, rows = std::min(block, n - first);
-    // Two activations alternate: no tape is kept.
-    seed_input_streams<Scalar>(layout, x.middleRows(first, rows), ws.activations[0]);
-    for (size_t l = 0; l < modules_.size(); ++l) {
-      modules_[l]->forward(layout, params + offsets_[l], ws.activations[0], ws.activations[1],
-                           nullptr);
-      std::swap(ws.activations[0], ws.activations[1]);
+#pragma omp for schedule(static)
+    for (Eigen::Index b = 0; b < blocks; ++b) {
+      const Eigen::Index first = starts[b], rows = starts[b + 1] - first;
+      if (rows == 0) continue;
+      forward_block(params, layout, batch, first, rows, ws, false);
+      const Streams<Scalar>& result = ws.activations[modules_.size()];
+      for (int s = 0; s < layout.count(); ++s)
+        out.stream(s).middleRows(first, rows) = result.stream(s);
     }
-    for (int s = 0; s < layout.count(); ++s)
-      out.stream(s).middleRows(first, rows) = ws.activations[0].stream(s);
   }
 }
 
 template <typename Scalar>
 double Sequential<Scalar>::value_and_gradient(const Scalar* params, const StreamLayout& layout,
-                                              const Eigen::Ref<const Matrix<Scalar>>& x,
+                                              const Batch<Scalar>& batch,
                                               const StreamLoss<Scalar>& loss,
                                               Scalar* gradient) const {
   if (modules_.empty()) throw std::logic_error("Sequential::value_and_gradient: no modules");
-  const Eigen::Index n = x.rows(), block = options_.block_points;
-  const Eigen::Index blocks = (n + block - 1) / block;
+  check_batch(layout, batch, input_width());
+  const std::vector<Eigen::Index> starts = block_starts(batch.points.rows(), batch.groups);
+  const auto blocks = static_cast<Eigen::Index>(starts.size()) - 1;
   const int threads = thread_count(options_.threads);
   const size_t depth = modules_.size();
-  const SingleThreadedEigen single_threaded_products;
   prepare_workspaces(threads);
   for (auto& w : workspaces_) {
     w->gradient.setZero(parameter_count_);
@@ -167,11 +197,12 @@ double Sequential<Scalar>::value_and_gradient(const Scalar* params, const Stream
   }
 #pragma omp parallel num_threads(threads)
   {
+    single_threaded_products_in_this_task();
     Workspace& ws = workspace(omp_get_thread_num());
 #pragma omp for schedule(static)
     for (Eigen::Index b = 0; b < blocks; ++b) {
-      const Eigen::Index first = b * block, rows = std::min(block, n - first);
-      forward_block(params, layout, x, first, rows, ws, true);
+      const Eigen::Index first = starts[b], rows = starts[b + 1] - first;
+      forward_block(params, layout, batch, first, rows, ws, true);
       const Streams<Scalar>& out = ws.activations[depth];
       ws.adjoint.resize(out.points, out.count, out.width());
       ws.adjoint.data.setZero();
@@ -195,11 +226,12 @@ double Sequential<Scalar>::value_and_gradient(const Scalar* params, const Stream
 
 template <typename Scalar>
 void Sequential<Scalar>::residuals_and_jacobian(const Scalar* params, const StreamLayout& layout,
-                                                const Eigen::Ref<const Matrix<Scalar>>& x,
+                                                const Batch<Scalar>& batch,
                                                 const StreamResidual<Scalar>& residual,
                                                 Scalar* residuals, Scalar* jacobian) const {
   if (modules_.empty()) throw std::logic_error("Sequential::residuals_and_jacobian: no modules");
-  const Eigen::Index n = x.rows(), block = options_.block_points, p = parameter_count_;
+  check_batch(layout, batch, input_width());
+  const Eigen::Index n = batch.points.rows(), block = options_.block_points, p = parameter_count_;
   const Eigen::Index blocks = (n + block - 1) / block;
   const int threads = thread_count(options_.threads);
   const int c_count = residual.components();
@@ -210,15 +242,15 @@ void Sequential<Scalar>::residuals_and_jacobian(const Scalar* params, const Stre
       if (!m->has_per_point_gradients())
         throw std::logic_error("Sequential::residuals_and_jacobian: module '" + m->name() +
                                "' has no per-point parameter gradients");
-  const SingleThreadedEigen single_threaded_products;
   prepare_workspaces(threads);
 #pragma omp parallel num_threads(threads)
   {
+    single_threaded_products_in_this_task();
     Workspace& ws = workspace(omp_get_thread_num());
 #pragma omp for schedule(static)
     for (Eigen::Index b = 0; b < blocks; ++b) {
       const Eigen::Index first = b * block, rows = std::min(block, n - first);
-      forward_block(params, layout, x, first, rows, ws, record);
+      forward_block(params, layout, batch, first, rows, ws, record);
       const Streams<Scalar>& out = ws.activations[depth];
       residual.evaluate(first, layout, out, ws.r);
       // r is points × C column-major; the output is point-major, i.e. rᵀ column-major.
@@ -243,6 +275,15 @@ void Sequential<Scalar>::residuals_and_jacobian(const Scalar* params, const Stre
       }
     }
   }
+}
+
+std::pair<size_t, size_t> groups_in_block(std::span<const Eigen::Index> groups, Eigen::Index first,
+                                          Eigen::Index rows) {
+  const Eigen::Index n = groups.empty() ? 0 : groups.back();
+  const auto begin = std::lower_bound(groups.begin(), groups.end() - 1, first);
+  const auto end = first + rows == n ? groups.end() - 1
+                                     : std::lower_bound(begin, groups.end() - 1, first + rows);
+  return {static_cast<size_t>(begin - groups.begin()), static_cast<size_t>(end - groups.begin())};
 }
 
 template class Sequential<float>;

@@ -101,7 +101,8 @@ int StreamLayout::forward_order() const {
 
 template <typename Scalar>
 void seed_input_streams(const StreamLayout& layout, const Eigen::Ref<const Matrix<Scalar>>& x,
-                        Streams<Scalar>& out) {
+                        Streams<Scalar>& out,
+                        const Eigen::Ref<const Matrix<Scalar>>* point_tangents) {
   const Eigen::Index n = x.rows();
   const int d = layout.input_dim();
   if (x.cols() != d)
@@ -110,8 +111,18 @@ void seed_input_streams(const StreamLayout& layout, const Eigen::Ref<const Matri
   out.resize(n, layout.count(), d);
   out.stream(0) = x;
   const StreamSpec& spec = layout.spec();
-  for (int i = 0; i < layout.tangents(); ++i)
-    out.stream(layout.tangent(i)).rowwise() = spec.tangents.col(i).transpose().cast<Scalar>();
+  if (point_tangents && (point_tangents->rows() != n || point_tangents->cols() != d * layout.tangents()))
+    throw std::invalid_argument("seed_input_streams: per-point tangents are " +
+                                std::to_string(point_tangents->rows()) + " x " +
+                                std::to_string(point_tangents->cols()) + ", expected " +
+                                std::to_string(n) + " x " + std::to_string(d * layout.tangents()) +
+                                " (points x input_dim * tangents)");
+  for (int i = 0; i < layout.tangents(); ++i) {
+    if (point_tangents)
+      out.stream(layout.tangent(i)) = point_tangents->middleCols(i * d, d);
+    else
+      out.stream(layout.tangent(i)).rowwise() = spec.tangents.col(i).transpose().cast<Scalar>();
+  }
   for (int q = 0; q < layout.operators(); ++q) out.stream(layout.op(q)).setZero();
   for (int p = 0; p < layout.taylor_dirs(); ++p) {
     out.stream(layout.taylor(p, 1)).rowwise() =
@@ -121,9 +132,10 @@ void seed_input_streams(const StreamLayout& layout, const Eigen::Ref<const Matri
 }
 
 template void seed_input_streams<float>(const StreamLayout&, const Eigen::Ref<const Matrix<float>>&,
-                                        Streams<float>&);
+                                        Streams<float>&, const Eigen::Ref<const Matrix<float>>*);
 template void seed_input_streams<double>(const StreamLayout&,
-                                         const Eigen::Ref<const Matrix<double>>&, Streams<double>&);
+                                         const Eigen::Ref<const Matrix<double>>&, Streams<double>&,
+                                         const Eigen::Ref<const Matrix<double>>*);
 
 Eigen::MatrixXd biharmonic_directions_2d() {
   Eigen::MatrixXd w(2, 3);

@@ -116,10 +116,19 @@ struct Streams {
   auto stream(int s) const { return data.middleRows(s * points, points); }
 };
 
-// The input streams of points x (N × d): a⁰ = x, a⁽ⁱ⁾ = vᵢ, a^[C] = 0, a_{p,1} = w_p and
-// higher Taylor coefficients 0.
+// Tangent directions that differ from point to point (a ray's direction along the ray):
+// row n holds point n's T directions one after another, direction i in columns
+// [i·d, (i+1)·d). They replace the spec's shared `tangents` in the input streams; operator
+// streams stay defined over whichever tangents are seeded.
 template <typename Scalar>
-void seed_input_streams(const StreamLayout& layout,
-                        const Eigen::Ref<const Matrix<Scalar>>& x, Streams<Scalar>& out);
+using PointTangents = Matrix<Scalar>;  // N × (d·T)
+
+// The input streams of points x (N × d): a⁰ = x, a⁽ⁱ⁾ = vᵢ, a^[C] = 0, a_{p,1} = w_p and
+// higher Taylor coefficients 0. With `point_tangents` (rows matching x), a⁽ⁱ⁾ of point n is
+// its own direction i instead of the spec's.
+template <typename Scalar>
+void seed_input_streams(const StreamLayout& layout, const Eigen::Ref<const Matrix<Scalar>>& x,
+                        Streams<Scalar>& out,
+                        const Eigen::Ref<const Matrix<Scalar>>* point_tangents = nullptr);
 
 }  // namespace nfield::autodiff

@@ -71,6 +71,30 @@ class Field {
                 autodiff::Streams<Scalar>& out) const {
     network_.evaluate(parameters_.data(), layout, x, out);
   }
+
+  // The passes a trainer runs, at parameters θ (parameter_count() values), over a batch of
+  // points with optional per-point tangents and groups (autodiff/sequential.h).
+  void evaluate(const Scalar* theta, const autodiff::StreamLayout& layout,
+                const autodiff::Batch<Scalar>& batch, autodiff::Streams<Scalar>& out) const {
+    network_.evaluate(theta, layout, batch, out);
+  }
+  // Σ of `loss` over the batch; adds ∂/∂θ into `gradient` (not cleared). Returns the sum.
+  double value_and_gradient(const Scalar* theta, const autodiff::StreamLayout& layout,
+                            const autodiff::Batch<Scalar>& batch,
+                            const autodiff::StreamLoss<Scalar>& loss, Scalar* gradient) const {
+    return network_.value_and_gradient(theta, layout, batch, loss, gradient);
+  }
+  // Per-point residuals and their Jacobian ∂r/∂θ (Sequential::residuals_and_jacobian).
+  void residuals_and_jacobian(const Scalar* theta, const autodiff::StreamLayout& layout,
+                              const autodiff::Batch<Scalar>& batch,
+                              const autodiff::StreamResidual<Scalar>& residual,
+                              Scalar* residuals, Scalar* jacobian) const {
+    network_.residuals_and_jacobian(theta, layout, batch, residual, residuals, jacobian);
+  }
+  // Points per block and threads of every pass.
+  void set_evaluation(const autodiff::SequentialOptions& evaluation) {
+    network_.set_options(evaluation);
+  }
   // Values only: N × output_dim.
   autodiff::Matrix<Scalar> values(const Eigen::Ref<const autodiff::Matrix<Scalar>>& x) const;
 

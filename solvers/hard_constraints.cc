@@ -316,8 +316,10 @@ std::vector<LossTerm> with_ansatz(std::vector<LossTerm> terms, std::shared_ptr<c
                                   "' uses Taylor streams (derivatives of order > 2), which hard "
                                   "conditions (enforce: hard) do not support; use enforce: soft");
     auto inner = std::move(term.residual);
-    term.residual = [ansatz, inner = std::move(inner), spec = term.spec](const Eigen::MatrixXd& x) {
-      return std::make_unique<AnsatzResidual>(ansatz, inner(x), StreamLayout(spec), x);
+    term.residual = [ansatz, inner = std::move(inner), spec = term.spec](const TermPoints& points) {
+      if (!points.groups.empty())
+        throw std::invalid_argument("hard conditions (enforce: hard) apply to per-point loss terms only");
+      return std::make_unique<AnsatzResidual>(ansatz, inner(points), StreamLayout(spec), points.x);
     };
   }
   return terms;

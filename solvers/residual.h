@@ -56,15 +56,40 @@ class LinearResidual final : public Residual {
   Eigen::MatrixXd source_;
 };
 
+// What a loss term draws for one step: the network's inputs x (N × input_dim) and, for a
+// term whose residuals each read several points (a pixel's colour reads every sample of its
+// ray), the groups: offsets 0 = g₀ ≤ … ≤ g_G = N, group k being rows [g_k, g_{k+1}) of x
+// (autodiff::Batch keeps a group inside one block of the pass). `context` carries what such a
+// residual needs besides x (the rays' pixel colours, sample spacings); a term that has one
+// is drawn anew on resume rather than saved in the checkpoint. A term over single points
+// returns just the matrix, and its residual may take just the matrix.
+struct TermPoints {
+  TermPoints() = default;
+  TermPoints(Eigen::MatrixXd points) : x(std::move(points)) {}  // NOLINT: per-point terms
+  operator const Eigen::MatrixXd&() const { return x; }        // NOLINT: per-point terms
+
+  // Rows of the residual: one per group, or one per point.
+  Eigen::Index residual_rows() const {
+    return groups.empty() ? x.rows() : static_cast<Eigen::Index>(groups.size()) - 1;
+  }
+
+  Eigen::MatrixXd x;
+  std::vector<Eigen::Index> groups;
+  std::shared_ptr<const void> context;
+};
+
 // One term of the training loss: where its points come from, which streams it needs and
-// how its residual reads them.
+// how its residual reads them. A residual over groups (TermPoints.groups) writes one row of
+// r per group of the block it is given (autodiff::groups_in_block) and is trained by Adam
+// and L-BFGS; Levenberg–Marquardt takes per-point residuals only.
 struct LossTerm {
   std::string name;       // shown in progress lines and metrics.json ("pde", "dirichlet", …)
   std::string batch_key;  // the training.batch entry giving its size: interior, boundary, …
   double weight = 1.0;
   autodiff::StreamSpec spec;
-  std::function<Eigen::MatrixXd(Random&, Eigen::Index)> sample;
-  std::function<std::unique_ptr<Residual>(const Eigen::MatrixXd& points)> residual;
+  // Draws the points of a batch of `n` (points, or groups for a term over groups).
+  std::function<TermPoints(Random&, Eigen::Index n)> sample;
+  std::function<std::unique_ptr<Residual>(const TermPoints& points)> residual;
   // Optional: called when training stage s (0-based) starts, for terms whose residual
   // changes from stage to stage (a continuation parameter such as the eikonal viscosity);
   // residual() builds the current stage's residual afterwards. Before any call it builds the
@@ -72,7 +97,8 @@ struct LossTerm {
   std::function<void(int stage)> begin_stage;
 };
 
-// Adapts a residual on a point set to the autodiff StreamLoss: w/N Σ ‖r‖², r̄ = 2w r / N.
+// Adapts a residual on a point set to the autodiff StreamLoss: w/N Σ ‖r‖², r̄ = 2w r / N,
+// N the residual's rows (points, or groups).
 // With per-point weights aₙ (one per point of the set; causal training weights time slices
 // this way) the loss is w/N Σ aₙ ‖r(xₙ)‖² and r̄ₙ = 2w aₙ rₙ / N: the aₙ are constants of
 // the pass, never differentiated.

@@ -1,7 +1,6 @@
 // SPDX-License-Identifier: MIT
 #include "solvers/run.h"
 
-#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
@@ -20,6 +19,7 @@
 #include "io/version.h"
 #include "solvers/grid_output.h"
 #include "solvers/hard_constraints.h"
+#include "solvers/progress_printer.h"
 #include "solvers/trainer.h"
 
 namespace nfield::solvers {
@@ -83,49 +83,6 @@ double median(std::vector<double> v) {
   return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
 }
 
-// A terminal gets one line redrawn in place; a pipe or file gets a line every log_every steps.
-class ProgressPrinter {
- public:
-  explicit ProgressPrinter(int log_every) : log_every_(log_every), tty_(isatty(fileno(stdout))) {}
-  ~ProgressPrinter() { finish(); }
-  void operator()(const Progress& p) {
-    const bool last = p.step == p.total_steps;
-    if (tty_) {
-      const auto now = std::chrono::steady_clock::now();
-      if (!last && now - shown_ < std::chrono::milliseconds(100)) return;
-      shown_ = now;
-    } else if (p.step % log_every_ != 0 && !last && p.step != 1) {
-      return;
-    }
-    std::string terms;
-    for (size_t k = 0; k < p.term_names.size(); ++k) {
-      char buffer[96];
-      std::snprintf(buffer, sizeof buffer, " %s %.3e", p.term_names[k].c_str(), p.term_losses[k]);
-      terms += buffer;
-    }
-    for (const auto& [name, value] : p.extras) {
-      char buffer[96];
-      std::snprintf(buffer, sizeof buffer, " | %s %.3g", name.c_str(), value);
-      terms += buffer;
-    }
-    std::printf("%sstep %ld/%ld [%s] loss %.3e |%s | %.1f steps/s, ETA %.0f s%s", tty_ ? "\r\033[K" : "",
-                p.step, p.total_steps, p.optimizer.c_str(), p.loss, terms.c_str(),
-                p.steps_per_second, p.eta_seconds, tty_ ? "" : "\n");
-    std::fflush(stdout);
-    open_line_ = tty_;
-  }
-  void finish() {
-    if (open_line_) std::printf("\n");
-    open_line_ = false;
-  }
-
- private:
-  int log_every_;
-  bool tty_;
-  bool open_line_ = false;
-  std::chrono::steady_clock::time_point shown_{};
-};
-
 template <typename Scalar>
 StreamEvaluator evaluator(const fields::Field<Scalar>& field) {
   return [&field](const autodiff::StreamLayout& layout, const Eigen::MatrixXd& x) {
@@ -188,10 +145,11 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
   bool finished;
   {
     SignalGuard guard;
-    ProgressPrinter printer(setup.training.log_every);
+    ProgressPrinter printer({.log_every = setup.training.log_every});
     typename Trainer<Scalar>::Callbacks callbacks;
     callbacks.stop_requested = [] { return g_signal.load() != 0; };
-    callbacks.progress = [&printer](const Progress& p) { printer(p); };
+    callbacks.progress = [&printer](const Progress& p) { printer.step(p); };
+    callbacks.stage_begins = [&printer](const Progress& p) { printer.stage_begins(p); };
     callbacks.stage_error = [&] {
       if (const std::optional<double> error = setup.problem->reported_error(context)) return *error;
       return setup.problem->has_exact()

@@ -9,6 +9,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <algorithm>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
@@ -52,7 +53,7 @@ Trainer<Scalar>::Trainer(const Problem& problem, fields::Field<Scalar>& field,
   points_.resize(terms_.size());
   points_scalar_.resize(terms_.size());
   residuals_.resize(terms_.size());
-  field_.network().set_options({options_.block, options_.threads});
+  field_.set_evaluation({options_.block, options_.threads});
 }
 
 template <typename Scalar>
@@ -67,11 +68,14 @@ void Trainer<Scalar>::resample() {
     }
     if (static_cast<int>(k) == pde_) previous_adaptive_rows_ = adaptive_points_.rows();
     if (static_cast<int>(k) == pde_ && adaptive_points_.rows() > 0) {
-      Eigen::MatrixXd joined(points_[k].rows() + adaptive_points_.rows(), points_[k].cols());
-      joined << points_[k], adaptive_points_;
-      points_[k] = std::move(joined);
+      if (!points_[k].groups.empty())
+        throw std::logic_error("training.adaptive: loss term '" + terms_[k].name +
+                               "' reads groups of points; refinement adds single points");
+      Eigen::MatrixXd joined(points_[k].x.rows() + adaptive_points_.rows(), points_[k].x.cols());
+      joined << points_[k].x, adaptive_points_;
+      points_[k].x = std::move(joined);
     }
-    points_scalar_[k] = points_[k].template cast<Scalar>();
+    points_scalar_[k] = points_[k].x.template cast<Scalar>();
     residuals_[k] = terms_[k].residual(points_[k]);
   }
 }
@@ -79,10 +83,11 @@ void Trainer<Scalar>::resample() {
 template <typename Scalar>
 double Trainer<Scalar>::term_loss(size_t k, const Scalar* params, double weight, Scalar* gradient) {
   const bool causal = options_.causal.enabled && static_cast<int>(k) == pde_ &&
-                      causal_.point_weights.size() == points_[k].rows();
-  const ResidualLoss<Scalar> loss(*residuals_[k], weight, points_[k].rows(),
+                      causal_.point_weights.size() == points_[k].x.rows();
+  const ResidualLoss<Scalar> loss(*residuals_[k], weight, points_[k].residual_rows(),
                                   causal ? &causal_.point_weights : nullptr);
-  return field_.network().value_and_gradient(params, layouts_[k], points_scalar_[k], loss, gradient);
+  const autodiff::Batch<Scalar> batch{points_scalar_[k], nullptr, points_[k].groups};
+  return field_.value_and_gradient(params, layouts_[k], batch, loss, gradient);
 }
 
 template <typename Scalar>
@@ -177,33 +182,33 @@ void Trainer<Scalar>::renew_points(const StageOptions& stage) {
 template <typename Scalar>
 void Trainer<Scalar>::join_adaptive_points() {
   // The stage's own points stay; only the extra set behind them changes.
-  const Eigen::Index own = points_[pde_].rows() - previous_adaptive_rows_;
-  Eigen::MatrixXd joined(own + adaptive_points_.rows(), points_[pde_].cols());
-  joined << points_[pde_].topRows(own), adaptive_points_;
-  points_[pde_] = std::move(joined);
-  points_scalar_[pde_] = points_[pde_].template cast<Scalar>();
+  const Eigen::Index own = points_[pde_].x.rows() - previous_adaptive_rows_;
+  Eigen::MatrixXd joined(own + adaptive_points_.rows(), points_[pde_].x.cols());
+  joined << points_[pde_].x.topRows(own), adaptive_points_;
+  points_[pde_].x = std::move(joined);
+  points_scalar_[pde_] = points_[pde_].x.template cast<Scalar>();
   residuals_[pde_] = terms_[pde_].residual(points_[pde_]);
   previous_adaptive_rows_ = adaptive_points_.rows();
 }
 
 template <typename Scalar>
 void Trainer<Scalar>::refine() {
-  Eigen::MatrixXd candidates;
+  TermPoints candidates;
   {
     const AttachSequence attach(rng_, sequences_.empty() ? nullptr : &sequences_[pde_]);
     candidates = terms_[pde_].sample(rng_, options_.adaptive.candidates);
   }
   const auto residual = terms_[pde_].residual(candidates);
   const std::vector<Eigen::Index> best =
-      largest(squared_residuals(pde_, candidates, *residual), options_.adaptive.add);
-  append_capped(adaptive_points_, candidates(best, Eigen::all), options_.adaptive.max_points);
+      largest(squared_residuals(pde_, candidates.x, *residual), options_.adaptive.add);
+  append_capped(adaptive_points_, candidates.x(best, Eigen::all), options_.adaptive.max_points);
 }
 
 template <typename Scalar>
 void Trainer<Scalar>::update_causal() {
-  const Eigen::VectorXd r2 = squared_residuals(pde_, points_[pde_], *residuals_[pde_]);
+  const Eigen::VectorXd r2 = squared_residuals(pde_, points_[pde_].x, *residuals_[pde_]);
   const auto [t0, t1] = problem_.domain().time();
-  causal_ = solvers::causal_weights(points_[pde_].col(problem_.domain().time_column()), r2, t0, t1,
+  causal_ = solvers::causal_weights(points_[pde_].x.col(problem_.domain().time_column()), r2, t0, t1,
                                     options_.causal.slices, options_.causal.epsilon);
 }
 
@@ -220,8 +225,7 @@ std::vector<std::pair<std::string, double>> Trainer<Scalar>::extra_metrics() con
 }
 
 template <typename Scalar>
-void Trainer<Scalar>::report(const Callbacks& callbacks, const StageOptions& stage, double lr) {
-  if (!callbacks.progress) return;
+Progress Trainer<Scalar>::progress(const StageOptions& stage, double lr) const {
   Progress p;
   p.stage = stage_;
   p.optimizer = stage.optimizer;
@@ -233,11 +237,16 @@ void Trainer<Scalar>::report(const Callbacks& callbacks, const StageOptions& sta
   for (double l : losses_) p.loss += l;
   if (options_.causal.enabled && !causal_.weights.empty())
     p.extras.emplace_back("causal min w", causal_.min_weight());
-  const double elapsed = now_seconds() - started_;
-  const long done = global_step_ - started_step_;
+  const double elapsed = now_seconds() - stage_started_;
+  const long done = global_step_ - stage_started_step_;
   p.steps_per_second = elapsed > 0 ? done / elapsed : 0;
   p.eta_seconds = p.steps_per_second > 0 ? (p.total_steps - p.step) / p.steps_per_second : 0;
-  callbacks.progress(p);
+  return p;
+}
+
+template <typename Scalar>
+void Trainer<Scalar>::report(const Callbacks& callbacks, const StageOptions& stage, double lr) {
+  if (callbacks.progress) callbacks.progress(progress(stage, lr));
 }
 
 template <typename Scalar>
@@ -250,7 +259,8 @@ bool Trainer<Scalar>::run_adam(const StageOptions& stage, const Callbacks& callb
     const bool refine_now = options_.adaptive.enabled && global_step_ > 0 &&
                             global_step_ % options_.adaptive.every == 0;
     if (refine_now) refine();
-    if (refine_now || global_step_ % options_.resample_every == 0 || !residuals_[0]) resample();
+    const bool drawn = std::all_of(residuals_.begin(), residuals_.end(), [](const auto& r) { return r != nullptr; });
+    if (refine_now || global_step_ % options_.resample_every == 0 || !drawn) resample();
     if (options_.causal.enabled) update_causal();
     if (options_.balance.method == "grad_norm" && global_step_ % options_.balance.every == 0)
       balanced_gradient(gradient.data());
@@ -312,7 +322,7 @@ class StepCallback final : public ceres::IterationCallback {
 template <typename Scalar>
 class TermCost final : public ceres::CostFunction {
  public:
-  TermCost(const autodiff::Sequential<Scalar>& network, const autodiff::StreamLayout& layout,
+  TermCost(const fields::Field<Scalar>& network, const autodiff::StreamLayout& layout,
            const autodiff::Matrix<Scalar>& points,
            std::unique_ptr<autodiff::StreamResidual<Scalar>> residual)
       : network_(network), layout_(layout), points_(points), residual_(std::move(residual)) {
@@ -325,13 +335,13 @@ class TermCost final : public ceres::CostFunction {
     const Eigen::Index m = this->num_residuals(), p = network_.parameter_count();
     double* jacobian = jacobians ? jacobians[0] : nullptr;
     if constexpr (std::is_same_v<Scalar, double>) {
-      network_.residuals_and_jacobian(parameters[0], layout_, points_, *residual_, residuals,
+      network_.residuals_and_jacobian(parameters[0], layout_, autodiff::Batch<Scalar>{points_}, *residual_, residuals,
                                       jacobian);
     } else {
       theta_ = Eigen::Map<const Eigen::VectorXd>(parameters[0], p).cast<Scalar>();
       r_.resize(m);
       if (jacobian) j_.resize(m * p);
-      network_.residuals_and_jacobian(theta_.data(), layout_, points_, *residual_, r_.data(),
+      network_.residuals_and_jacobian(theta_.data(), layout_, autodiff::Batch<Scalar>{points_}, *residual_, r_.data(),
                                       jacobian ? j_.data() : nullptr);
       Eigen::Map<Eigen::VectorXd>(residuals, m) = r_.template cast<double>();
       if (jacobian) Eigen::Map<Eigen::VectorXd>(jacobian, m * p) = j_.template cast<double>();
@@ -356,7 +366,7 @@ class TermCost final : public ceres::CostFunction {
   }
 
  private:
-  const autodiff::Sequential<Scalar>& network_;
+  const fields::Field<Scalar>& network_;
   const autodiff::StreamLayout& layout_;
   const autodiff::Matrix<Scalar>& points_;
   std::unique_ptr<autodiff::StreamResidual<Scalar>> residual_;
@@ -477,8 +487,14 @@ bool Trainer<Scalar>::run_lm(const StageOptions& stage, const Callbacks& callbac
   while (true) {
     // Ceres counts the entries of its dense Jacobian in an int.
     double rows = 0;
-    for (size_t k = 0; k < terms_.size(); ++k)
-      rows += static_cast<double>(points_[k].rows()) * residuals_[k]->components();
+    for (size_t k = 0; k < terms_.size(); ++k) {
+      if (!points_[k].groups.empty())
+        throw std::runtime_error("training stage " + std::to_string(stage_ + 1) +
+                                 " (lm): loss term '" + terms_[k].name +
+                                 "' reads groups of points; Levenberg-Marquardt takes per-point "
+                                 "residuals only (use adam or lbfgs)");
+      rows += static_cast<double>(points_[k].x.rows()) * residuals_[k]->components();
+    }
     const std::string too_large = lm_jacobian_too_large(rows, field_.parameter_count());
     if (!too_large.empty())
       throw std::runtime_error("training stage " + std::to_string(stage_ + 1) +
@@ -486,11 +502,11 @@ bool Trainer<Scalar>::run_lm(const StageOptions& stage, const Callbacks& callbac
     costs.clear();
     for (size_t k = 0; k < terms_.size(); ++k)
       costs.push_back(std::make_unique<TermCost<Scalar>>(
-          field_.network(), layouts_[k], points_scalar_[k],
+          field_, layouts_[k], points_scalar_[k],
           // λ of training.balance is held fixed here, as in L-BFGS; causal weights are not
           // applied in this stage (its residuals are the plain ones).
           std::make_unique<ScaledResidual<Scalar>>(*residuals_[k], terms_[k].weight * balance_[k],
-                                                   points_[k].rows())));
+                                                   points_[k].x.rows())));
     ceres::Problem::Options problem_options;
     problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
     ceres::Problem problem(problem_options);
@@ -523,12 +539,12 @@ bool Trainer<Scalar>::run_lm(const StageOptions& stage, const Callbacks& callbac
 
 template <typename Scalar>
 bool Trainer<Scalar>::run(const Callbacks& callbacks) {
-  started_ = now_seconds();
-  started_step_ = global_step_;
   for (; stage_ < static_cast<int>(options_.stages.size()); ++stage_) {
     const StageOptions& stage = options_.stages[stage_];
-    const double stage_started = now_seconds();
+    const double stage_started = stage_started_ = now_seconds();
+    stage_started_step_ = global_step_;
     begin_stage();
+    if (callbacks.stage_begins) callbacks.stage_begins(progress(stage, stage.lr));
     const bool finished = stage.optimizer == "lbfgs" ? run_lbfgs(stage, callbacks)
                           : stage.optimizer == "lm"  ? run_lm(stage, callbacks)
                                                      : run_adam(stage, callbacks);
@@ -560,7 +576,13 @@ void Trainer<Scalar>::save_state(io::H5Writer& file) const {
     file.write_attribute("trainer/adam/m", "t", static_cast<std::int64_t>(adam_->steps()));
   }
   for (size_t k = 0; k < terms_.size(); ++k)
-    if (points_[k].size() > 0) file.write("trainer/points/" + std::to_string(k), points_[k]);
+    // Points with a context (rays and their pixels) are drawn anew on resume.
+    if (points_[k].x.size() > 0 && !points_[k].context) {
+      file.write("trainer/points/" + std::to_string(k), points_[k].x);
+      if (!points_[k].groups.empty())
+        file.write("trainer/groups/" + std::to_string(k),
+                   std::vector<std::int64_t>(points_[k].groups.begin(), points_[k].groups.end()));
+    }
   file.write("trainer/stage_losses", stage_losses_);
   file.write("trainer/stage_errors", stage_errors_);
   for (size_t k = 0; k < sequences_.size(); ++k)
@@ -587,8 +609,13 @@ void Trainer<Scalar>::load_state(const io::H5Reader& file) {
   for (size_t k = 0; k < terms_.size(); ++k) {
     const std::string name = "trainer/points/" + std::to_string(k);
     if (!file.has_dataset(name)) continue;
-    points_[k] = file.read_matrix<double>(name);
-    points_scalar_[k] = points_[k].template cast<Scalar>();
+    points_[k] = TermPoints(file.read_matrix<double>(name));
+    const std::string groups = "trainer/groups/" + std::to_string(k);
+    if (file.has_dataset(groups)) {
+      const auto g = file.read_vector<std::int64_t>(groups);
+      points_[k].groups.assign(g.data(), g.data() + g.size());
+    }
+    points_scalar_[k] = points_[k].x.template cast<Scalar>();
     residuals_[k] = terms_[k].residual(points_[k]);
   }
   if (file.has_dataset("trainer/stage_losses")) {

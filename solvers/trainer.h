@@ -57,8 +57,8 @@ struct Progress {
   double loss = 0;
   std::vector<std::string> term_names;
   std::vector<double> term_losses;
-  double steps_per_second = 0;
-  double eta_seconds = 0;
+  double steps_per_second = 0;  // over the current stage so far
+  double eta_seconds = 0;       // the remaining steps of all stages at that rate
   std::vector<std::pair<std::string, double>> extras;  // e.g. the minimum causal weight
 };
 
@@ -68,6 +68,9 @@ class Trainer {
   struct Callbacks {
     std::function<bool()> stop_requested;           // polled every step
     std::function<void(const Progress&)> progress;  // after every step
+    // When a stage starts, with the counters and losses so far (a stage's first step can be
+    // long: a Levenberg–Marquardt Jacobian).
+    std::function<void(const Progress&)> stage_begins;
     std::function<void()> checkpoint;               // every checkpoint_every steps
     // After each stage: the error against the exact solution then (NaN: none), kept per
     // stage in stage_errors() and in the checkpoint.
@@ -93,7 +96,7 @@ class Trainer {
 
   // Sampling and balancing state, for metrics.json and tests.
   std::vector<std::pair<std::string, double>> extra_metrics() const;
-  const Eigen::MatrixXd& points(size_t term) const { return points_[term]; }
+  const Eigen::MatrixXd& points(size_t term) const { return points_[term].x; }
   const Eigen::MatrixXd& adaptive_points() const { return adaptive_points_; }
   const std::vector<double>& balance_weights() const { return balance_; }
   const CausalWeights& causal_weights() const { return causal_; }
@@ -131,6 +134,7 @@ class Trainer {
   // After a Ceres iteration has been accepted or rejected: parameters, step counters,
   // progress and checkpoints. Returns false when a stop is requested.
   bool finish_ceres_step(const StageOptions& stage, const Callbacks& callbacks, double& last);
+  Progress progress(const StageOptions& stage, double lr) const;
   void report(const Callbacks& callbacks, const StageOptions& stage, double lr);
 
   const Problem& problem_;
@@ -139,7 +143,7 @@ class Trainer {
   std::vector<LossTerm> terms_;
   std::vector<std::string> names_;
   std::vector<autodiff::StreamLayout> layouts_;
-  std::vector<Eigen::MatrixXd> points_;
+  std::vector<TermPoints> points_;
   std::vector<autodiff::Matrix<Scalar>> points_scalar_;
   std::vector<std::unique_ptr<Residual>> residuals_;
   std::vector<double> losses_, stage_losses_, stage_errors_, stage_seconds_, step_ms_;
@@ -148,8 +152,8 @@ class Trainer {
   int stage_ = 0;
   int stage_step_ = 0;
   long global_step_ = 0;
-  double started_ = 0;
-  long started_step_ = 0;
+  double stage_started_ = 0;     // wall clock and global step at the start of the stage
+  long stage_started_step_ = 0;  // (or of the resumed part of it)
   int pde_ = -1;                          // the problem's residual term
   std::vector<UnitSequence> sequences_;   // one per term (none for uniform sampling)
   Eigen::MatrixXd adaptive_points_;       // RAR extra set, appended to the PDE batch

@@ -324,7 +324,7 @@ TEST(Helmholtz, StretchedOperatorInTheLayerMatchesFiniteDifferences) {
   Eigen::MatrixXd x(0, 2);
   int corners = 0;
   while (x.rows() < 300) {
-    const Eigen::Vector2d p = terms[0].sample(rng, 1).row(0).transpose();
+    const Eigen::Vector2d p = terms[0].sample(rng, 1).x.row(0).transpose();
     const double m0 = std::abs(p(0)), m1 = std::abs(p(1));
     if (std::max(m0, m1) < 0.5 + 1e-3 || std::abs(m0 - 0.5) < 1e-3 || std::abs(m1 - 0.5) < 1e-3) continue;
     corners += m0 > 0.5 && m1 > 0.5;

@@ -133,7 +133,7 @@ TEST(Sdf, ResidualsVanishOnTheExactDistance) {
   const Eigen::Vector3d n = on.row(0).transpose() / 0.5;
   const Eigen::Vector3d t = n.unitOrthogonal();
   for (int a = 0; a < 3; ++a) turned.stream(layout.tangent(a))(0, 0) = t(a);
-  terms[0].residual(on.topRows(1))->evaluate(0, layout, turned, r);
+  terms[0].residual(Eigen::MatrixXd(on.topRows(1)))->evaluate(0, layout, turned, r);
   EXPECT_NEAR(r.rightCols(4).leftCols(3).squaredNorm(), 100, 1e-9);
 }
 

@@ -1,0 +1,90 @@
+// SPDX-License-Identifier: MIT
+//
+// Progress lines keep coming while one optimizer step runs long (a Levenberg–Marquardt
+// iteration), and a slow stage prints its steps by time, not only every log_every steps.
+#include "solvers/progress_printer.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cstdio>
+#include <string>
+#include <thread>
+
+namespace nfield::solvers {
+namespace {
+
+std::string contents(std::FILE* f) {
+  std::fflush(f);
+  std::rewind(f);
+  std::string text;
+  char buffer[512];
+  while (std::fgets(buffer, sizeof buffer, f)) text += buffer;
+  return text;
+}
+
+int count(const std::string& text, const std::string& what) {
+  int n = 0;
+  for (size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
+Progress lm_progress(long step) {
+  Progress p;
+  p.stage = 1;
+  p.optimizer = "lm";
+  p.step = step;
+  p.total_steps = 1000;
+  p.loss = 1.5e-3;
+  p.term_names = {"pde"};
+  p.term_losses = {1.5e-3};
+  p.steps_per_second = 0.25;
+  p.eta_seconds = 4 * (1000 - step);
+  return p;
+}
+
+TEST(ProgressPrinter, ALongStepStillPrintsLines) {
+  std::FILE* f = std::tmpfile();
+  ASSERT_NE(f, nullptr);
+  {
+    ProgressPrinter printer({.log_every = 100, .interval = 0.2, .out = f, .terminal = false});
+    printer.stage_begins(lm_progress(500));
+    std::this_thread::sleep_for(std::chrono::milliseconds(750));
+  }
+  const std::string text = contents(f);
+  EXPECT_GE(count(text, "step 501/1000 [lm] running for"), 2) << text;
+  EXPECT_EQ(count(text, "\n"), count(text, "running for")) << text;
+  std::fclose(f);
+}
+
+TEST(ProgressPrinter, SlowStepsPrintByTimeAndFastOnesEveryLogEvery) {
+  std::FILE* f = std::tmpfile();
+  ASSERT_NE(f, nullptr);
+  {
+    ProgressPrinter printer({.log_every = 100, .interval = 0.2, .out = f, .terminal = false});
+    printer.stage_begins(lm_progress(500));
+    printer.step(lm_progress(501));  // a stage's first step always shows
+    for (long s = 502; s < 505; ++s) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(500));
+      printer.step(lm_progress(s));
+    }
+    for (long s = 505; s <= 700; ++s) printer.step(lm_progress(s));  // fast: 600 and 700
+  }
+  const std::string text = contents(f);
+  // 502 … 504 each ran longer than the interval: "running" lines, then the step's own.
+  for (long s : {502, 503, 504})
+    EXPECT_GE(count(text, "step " + std::to_string(s) + "/1000 [lm] running for"), 1) << text;
+  for (long s : {501, 502, 503, 504, 600, 700})
+    EXPECT_EQ(count(text, "step " + std::to_string(s) + "/1000 [lm] loss"), 1) << s << "\n" << text;
+  EXPECT_EQ(count(text, "step 650/1000"), 0) << text;
+  EXPECT_NE(text.find("4.00 s/step, ETA"), std::string::npos) << text;
+  std::fclose(f);
+}
+
+TEST(ProgressPrinter, RejectsABadInterval) {
+  EXPECT_THROW(ProgressPrinter({.interval = 0}), std::invalid_argument);
+  EXPECT_THROW(ProgressPrinter({.log_every = 0}), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace nfield::solvers
