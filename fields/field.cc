@@ -7,7 +7,9 @@
 #include <stdexcept>
 
 #include "fields/activation_layer.h"
+#include "autodiff/on_columns.h"
 #include "fields/dense.h"
+#include "fields/radiance_network.h"
 #include "io/registry.h"
 
 namespace nfield::fields {
@@ -18,6 +20,7 @@ const Registry<int>& field_types() {
     Registry<int> r("field type");
     r.add("siren", 0);
     r.add("mlp", 1);
+    r.add("nerf", 2);
     return r;
   }();
   return registry;
@@ -29,6 +32,8 @@ const Registry<int>& field_types() {
 }
 
 bool is_siren(const FieldOptions& o) { return Registry<int>::lower(o.type) == "siren"; }
+bool is_nerf(const FieldOptions& o) { return Registry<int>::lower(o.type) == "nerf"; }
+
 
 // Uniform in [−a, a] from the raw 64-bit engine, independent of library distributions.
 double uniform(std::mt19937_64& rng, double a) {
@@ -39,9 +44,19 @@ double uniform(std::mt19937_64& rng, double a) {
 
 void FieldOptions::validate() const {
   field_types().at(type);
-  if (input_dim < 1 || input_dim > 4)
-    reject("input_dim", std::to_string(input_dim), "must be in [1, 4]");
+  if (input_dim < 1) reject("input_dim", std::to_string(input_dim), "must be >= 1");
   if (output_dim < 1) reject("output_dim", std::to_string(output_dim), "must be >= 1");
+  if (is_nerf(*this) && input_dim != kRadianceInputs)
+    reject("input_dim", std::to_string(input_dim), "must be 6 for nerf (position, direction)");
+  if (is_nerf(*this) && output_dim != kRadianceOutputs)
+    reject("output_dim", std::to_string(output_dim), "must be 4 for nerf (density, r, g, b)");
+  if (is_nerf(*this)) {
+    for (size_t i = 0; i < color_hidden.size(); ++i)
+      if (color_hidden[i] < 1)
+        reject("color_hidden[" + std::to_string(i) + "]", std::to_string(color_hidden[i]), "must be >= 1");
+    if (direction_frequencies < 1 || direction_frequencies > 16)
+      reject("direction_frequencies", std::to_string(direction_frequencies), "must be in [1, 16]");
+  }
   if (hidden.empty()) reject("hidden", "[]", "needs at least one hidden layer");
   for (size_t i = 0; i < hidden.size(); ++i)
     if (hidden[i] < 1)
@@ -64,10 +79,23 @@ void FieldOptions::validate() const {
 std::vector<std::string> field_type_names() { return field_types().names(); }
 
 template <typename Scalar>
+const autodiff::Module<Scalar>& parameter_owner(const autodiff::Module<Scalar>& module) {
+  if (const auto* on = dynamic_cast<const autodiff::OnColumns<Scalar>*>(&module)) return on->inner();
+  return module;
+}
+
+template <typename Scalar>
 Field<Scalar>::Field(FieldOptions options, autodiff::SequentialOptions evaluation)
     : options_(std::move(options)), network_(evaluation) {
   options_.validate();
   const int d = options_.input_dim;
+  if (is_nerf(options_)) {
+    encoding_matrix_ = fields::encoding_matrix(options_.encoding, 3);
+    add_radiance_modules(options_, network_);
+    parameters_.setZero(network_.parameter_count());
+    initialize();
+    return;
+  }
   encoding_matrix_ = fields::encoding_matrix(options_.encoding, d);
   Eigen::Index width = d;
   if (auto encoding = make_encoding<Scalar>(options_.encoding, d)) {
@@ -96,7 +124,7 @@ void Field<Scalar>::initialize() {
   const bool relu = Registry<int>::lower(options_.activation) == "relu";
   int dense_index = 0;
   for (size_t m = 0; m < network_.modules().size(); ++m) {
-    const auto& module = *network_.modules()[m];
+    const auto& module = parameter_owner(*network_.modules()[m]);
     if (module.parameter_count() == 0) continue;
     const Eigen::Index in = module.input_width(), out = module.output_width();
     Scalar* p = parameters_.data() + network_.parameter_offset(m);
@@ -141,6 +169,8 @@ Field<Other> Field<Scalar>::cast() const {
   return other;
 }
 
+template const autodiff::Module<float>& parameter_owner(const autodiff::Module<float>&);
+template const autodiff::Module<double>& parameter_owner(const autodiff::Module<double>&);
 template class Field<float>;
 template class Field<double>;
 template Field<double> Field<float>::cast<double>() const;

@@ -7,6 +7,9 @@
 //          U(−1/n, 1/n), later U(−√(6/n)/ω, √(6/n)/ω), n the fan-in; biases U(−1/√n, 1/√n).
 //   mlp    x → γ(x) → [Dense → σ] × H → Dense, σ = `activation`; He-uniform weights for relu,
 //          Xavier-uniform otherwise, zero biases.
+//   nerf   a radiance field: [x, d] → [density, r, g, b] (raw), d entering after the trunk
+//          (fields/radiance_network.h); `hidden` is the trunk, `color_hidden` the colour
+//          layers, `encoding` encodes x; relu by default; weights initialized as mlp.
 //
 // `hidden` lists the H hidden widths: the SIREN reference network of the paper, d → 256,
 // three 256 → 256 layers and 256 → 1, is hidden = [256, 256, 256, 256].
@@ -23,14 +26,16 @@
 namespace nfield::fields {
 
 struct FieldOptions {
-  std::string type = "siren";         // siren | mlp
-  int input_dim = 2;                  // 1 … 4
+  std::string type = "siren";         // siren | mlp | nerf
+  int input_dim = 2;                  // ≥ 1 (nerf: 6)
   int output_dim = 1;                 // ≥ 1
   std::vector<int> hidden{256, 256, 256, 256};
   std::string activation = "sine";    // mlp only: sine | tanh | softplus | relu | identity
   double first_omega = 30.0;          // siren: ω₀ of the first layer
   double hidden_omega = 30.0;         // siren: ω of later layers (mlp sine: its frequency)
   EncodingOptions encoding;
+  std::vector<int> color_hidden{64};  // nerf: widths of the colour layers
+  int direction_frequencies = 4;      // nerf: octaves of the view direction's encoding
   std::uint64_t seed = 0;             // initial weights
 
   // Throws std::invalid_argument naming the field, its value and the rule.
@@ -38,6 +43,12 @@ struct FieldOptions {
 };
 
 std::vector<std::string> field_type_names();
+
+// The module that holds a layer's parameters: itself, or the module inside an
+// autodiff::OnColumns (a Dense carried on some columns is still a Dense for initialization
+// and checkpoints).
+template <typename Scalar>
+const autodiff::Module<Scalar>& parameter_owner(const autodiff::Module<Scalar>& module);
 
 template <typename Scalar>
 class Field {

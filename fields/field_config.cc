@@ -30,6 +30,16 @@ FieldOptions field_options_from_config(const io::ConfigNode& node, int input_dim
     for (int h : o.hidden) node.require("hidden", h >= 1 && h <= 16384, "expected widths in [1, 16384]");
   }
   if (o.type == "mlp") o.activation = node.get_choice("activation", activation_names(), "tanh");
+  if (o.type == "nerf") {
+    o.activation = node.get_choice("activation", activation_names(), "relu");
+    if (node.has("color_hidden")) {
+      o.color_hidden = node.get<std::vector<int>>("color_hidden");
+      for (int c : o.color_hidden)
+        node.require("color_hidden", c >= 1 && c <= 16384, "expected widths in [1, 16384]");
+    }
+    if (node.has("direction_frequencies"))
+      o.direction_frequencies = node.get_in_range("direction_frequencies", 1, 16);
+  }
   o.first_omega = node.get_or("first_omega", o.first_omega);
   node.require("first_omega", o.first_omega > 0, "expected a number > 0");
   o.hidden_omega = node.get_or("hidden_omega", o.hidden_omega);
@@ -70,7 +80,11 @@ YAML::Node to_yaml(const FieldOptions& o, std::vector<std::string> input_names) 
   YAML::Node n;
   n["type"] = o.type;
   n["hidden"] = o.hidden;
-  if (o.type == "mlp") n["activation"] = o.activation;
+  if (o.type == "mlp" || o.type == "nerf") n["activation"] = o.activation;
+  if (o.type == "nerf") {
+    n["color_hidden"] = o.color_hidden;
+    n["direction_frequencies"] = o.direction_frequencies;
+  }
   n["first_omega"] = o.first_omega;
   n["hidden_omega"] = o.hidden_omega;
   n["seed"] = o.seed;

@@ -3,7 +3,7 @@
 // The `field:` section of a config (defaults in FieldOptions, fields/field.h):
 //
 //   field:
-//     type: siren             # siren | mlp
+//     type: siren             # siren | mlp | nerf (color_hidden: [64], direction_frequencies: 4)
 //     hidden: [64, 64, 64]    # hidden widths
 //     first_omega: 30         # siren
 //     hidden_omega: 30        # siren (mlp with sine: its frequency)

@@ -33,12 +33,18 @@ void save_field(io::H5Writer& file, const Field<Scalar>& field, const std::strin
     file.write_attribute(group, "encoding_at", std::span<const double>(o.encoding.at));
     file.write_attribute(group, "encoding_from_stage", static_cast<std::int64_t>(o.encoding.from_stage));
   }
+  if (Registry<int>::lower(o.type) == "nerf") {
+    std::vector<std::int64_t> color(o.color_hidden.begin(), o.color_hidden.end());
+    file.write_attribute(group, "color_hidden", std::span<const std::int64_t>(color));
+    file.write_attribute(group, "direction_frequencies", o.direction_frequencies);
+  }
   if (field.encoding_matrix().rows() > 0) file.write(group + "/encoding", field.encoding_matrix());
   const auto& modules = field.network().modules();
   int layer = 0;
   for (size_t m = 0; m < modules.size(); ++m) {
-    const Eigen::Index in = modules[m]->input_width(), out = modules[m]->output_width();
-    if (modules[m]->parameter_count() == 0) continue;
+    const auto& owner = parameter_owner(*modules[m]);
+    const Eigen::Index in = owner.input_width(), out = owner.output_width();
+    if (owner.parameter_count() == 0) continue;
     const Scalar* p = field.parameters().data() + field.network().parameter_offset(m);
     const std::string prefix = group + "/layers/" + std::to_string(layer++);
     file.write(prefix + "/weight", Eigen::Map<const autodiff::Matrix<Scalar>>(p, out, in));
@@ -70,6 +76,13 @@ FieldOptions load_field_options(const io::H5Reader& file, const std::string& gro
   if (file.has_attribute(group, "encoding_from_stage"))
     o.encoding.from_stage =
         static_cast<int>(file.read_attribute<std::int64_t>(group, "encoding_from_stage"));
+  if (file.has_attribute(group, "color_hidden")) {
+    const auto color = file.read_attribute<std::vector<std::int64_t>>(group, "color_hidden");
+    o.color_hidden.assign(color.begin(), color.end());
+  }
+  if (file.has_attribute(group, "direction_frequencies"))
+    o.direction_frequencies =
+        static_cast<int>(file.read_attribute<std::int64_t>(group, "direction_frequencies"));
   return o;
 }
 
@@ -79,8 +92,9 @@ Field<Scalar> load_field(const io::H5Reader& file, const std::string& group) {
   const auto& modules = field.network().modules();
   int layer = 0;
   for (size_t m = 0; m < modules.size(); ++m) {
-    const Eigen::Index in = modules[m]->input_width(), out = modules[m]->output_width();
-    if (modules[m]->parameter_count() == 0) continue;
+    const auto& owner = parameter_owner(*modules[m]);
+    const Eigen::Index in = owner.input_width(), out = owner.output_width();
+    if (owner.parameter_count() == 0) continue;
     Scalar* p = field.parameters().data() + field.network().parameter_offset(m);
     const std::string prefix = group + "/layers/" + std::to_string(layer++);
     const auto weight = file.read_matrix<Scalar>(prefix + "/weight");

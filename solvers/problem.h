@@ -32,6 +32,9 @@ class Problem {
  public:
   virtual ~Problem() = default;
   virtual const Domain& domain() const = 0;
+  // The field's inputs: the domain's coordinates, or more (a radiance field also takes the
+  // ray direction).
+  virtual int field_input_dim() const { return domain().input_dim(); }
   virtual int output_dim() const { return 1; }
   virtual std::vector<std::string> output_names() const { return {"u"}; }
   virtual std::vector<LossTerm> loss_terms() const = 0;
@@ -53,6 +56,10 @@ class Problem {
   // reported quantity (the factored Eikonal gives τ, the error is the travel time's). Called
   // after every training stage; write_outputs reports the same number after the last.
   virtual std::optional<double> reported_error(const OutputContext&) const { return std::nullopt; }
+
+  // Whether the field is written on the output grid over the domain (solution.vti and its
+  // PNG, grid errors): false for fields whose inputs are not the domain's coordinates.
+  virtual bool writes_grid_outputs() const { return true; }
 
   // Extra metrics (added to metrics.json) and files after training.
   virtual void write_outputs(const OutputContext& context, std::vector<std::pair<std::string, double>>& metrics) const;

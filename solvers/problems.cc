@@ -10,6 +10,7 @@ void register_problems(Registry<ProblemFactory>& registry) {
   registry.add("helmholtz", make_helmholtz);
   registry.add("eikonal", make_eikonal);
   registry.add("sdf", make_sdf);
+  registry.add("nerf", make_nerf);
 }
 
 namespace {

@@ -152,7 +152,7 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
     callbacks.stage_begins = [&printer](const Progress& p) { printer.stage_begins(p); };
     callbacks.stage_error = [&] {
       if (const std::optional<double> error = setup.problem->reported_error(context)) return *error;
-      return setup.problem->has_exact()
+      return setup.problem->has_exact() && setup.problem->writes_grid_outputs()
                  ? grid_error(*setup.problem, with_ansatz(evaluator(field), ansatz), setup.output).rel_l2
                  : std::numeric_limits<double>::quiet_NaN();
     };
@@ -164,7 +164,9 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
   write_checkpoint(dir / "checkpoint.h5", field, trainer, config_text, config_dir);
 
   const GridMetrics grid =
-      write_grid_outputs(*setup.problem, with_ansatz(evaluator(field), ansatz), setup.output);
+      setup.problem->writes_grid_outputs()
+          ? write_grid_outputs(*setup.problem, with_ansatz(evaluator(field), ansatz), setup.output)
+          : GridMetrics{};
   std::vector<std::pair<std::string, double>> extra;
   setup.problem->write_outputs(context, extra);
 
@@ -201,7 +203,7 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
     metrics["rel_l2"] = grid.rel_l2;
     metrics["max_abs_err"] = grid.max_abs_err;
   }
-  metrics["residual_rms"] = grid.residual_rms;
+  if (setup.problem->writes_grid_outputs()) metrics["residual_rms"] = grid.residual_rms;
   for (const auto& [key, value] : trainer.extra_metrics()) metrics[key] = value;
   for (const auto& [key, value] : extra) metrics[key] = value;
   metrics["nfield_version"] = std::string(version());
@@ -253,7 +255,7 @@ RunSetup load_run(const std::filesystem::path& config, const std::vector<std::st
   s.problem = make_problem({s.root, s.data_dir});
   s.training = TrainingOptions::from_config(s.root.child_or_empty("training"));
   s.field = fields::field_options_from_config(s.root.child_or_empty("field"),
-                                              s.problem->domain().input_dim(),
+                                              s.problem->field_input_dim(),
                                               s.problem->output_dim(), s.training.seed,
                                               s.problem->domain().input_names());
   const auto stages = static_cast<int>(s.training.stages.size());
@@ -315,6 +317,10 @@ void evaluate_checkpoint(const std::filesystem::path& checkpoint, int grid_point
   RunSetup setup = load_run(config_copy, {}, out_dir, data_dir);
   setup.output.grid.assign(setup.problem->domain().space_dim(), grid_points);
   const fields::Field<double> field = fields::load_field<double>(file);
+  if (!setup.problem->writes_grid_outputs())
+    throw std::runtime_error(checkpoint.string() + ": problem '" +
+                             setup.root.get<std::string>("problem") +
+                             "' has no grid outputs to evaluate");
   const GridMetrics grid = write_grid_outputs(
       *setup.problem, with_ansatz(evaluator(field), setup.problem->ansatz()), setup.output);
   std::printf("wrote %s", out_dir.string().c_str());

@@ -1,0 +1,344 @@
+// SPDX-License-Identifier: MIT
+//
+// Radiance fields as one more equation (NeRF, Mildenhall et al. 2020): the "residual" of a
+// ray is its rendered colour minus its pixel's colour, and it reads every sample of the ray.
+//
+//   problem: nerf
+//   data:
+//     train: data/multiview/bunny_blender/transforms_train.json   # NeRF-synthetic layout
+//     test: data/multiview/bunny_blender/transforms_test.json     # optional: test views
+//     background: white          # white | black | random (training rays only; tests: white)
+//   scene:
+//     lower: [-0.6, -0.6, -0.6]  # the box rays are clipped to, where the field lives
+//     upper: [0.6, 0.6, 0.6]
+//     near: 0.1                  # optional: no sample closer to the camera than this
+//   render:
+//     samples: 64                # stratified samples per ray (jittered in training)
+//     density: softplus          # softplus | trunc_exp: σ from the raw density output s
+//   field: {type: nerf, ...}     # input [x, d], output [s, r, g, b] (fields/field.h)
+//   training:
+//     batch: {rays: 1024}        # rays per step
+//
+// One loss term, "rgb", draws `rays` random training pixels, their rays clipped to the
+// scene box and stratified samples along them; its points are the samples [x, d], one
+// group per ray (autodiff::Batch), and its residual per ray is C(ray) − C_pixel (3 values),
+// with C from integrators/volume_rendering.h and σ = density(s), c = sigmoid(r, g, b). The
+// reverse pass runs the rendering adjoint and the output activations' derivatives back to
+// the samples' output streams. Training loss: mean over rays of ‖C − C_pixel‖².
+//
+// Outputs: every test view rendered (midpoint samples), beside its ground truth, the error,
+// depth and opacity, as PNGs in test_views/; PSNR and SSIM per view and their means in
+// metrics.json.
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+
+#include "autodiff/sequential.h"
+#include "integrators/multiview_dataset.h"
+#include "integrators/ray_batch.h"
+#include "integrators/ray_sampling.h"
+#include "integrators/scene_box.h"
+#include "integrators/volume_rendering.h"
+#include "io/image_metrics.h"
+#include "io/png_image.h"
+#include "solvers/problems.h"
+
+namespace nfield::solvers {
+namespace {
+
+using integrators::RaySamples;
+
+enum class Background { kWhite, kBlack, kRandom };
+
+// σ = density(s) and dσ/ds.
+struct DensityActivation {
+  bool truncated_exp = false;  // else softplus
+  double value(double s) const {
+    if (truncated_exp) return std::exp(std::min(s, 15.0));
+    return s > 20 ? s : std::log1p(std::exp(s));
+  }
+  double derivative(double s) const {
+    // Instant NGP's truncated exponential: exp with its gradient clamped at s = ±15.
+    if (truncated_exp) return std::exp(std::clamp(s, -15.0, 15.0));
+    return 1.0 / (1.0 + std::exp(-s));
+  }
+};
+
+double sigmoid(double z) { return 1.0 / (1.0 + std::exp(-z)); }
+
+// What a drawn ray batch needs besides the sample positions: the samples' spacing, each
+// ray's pixel colour and background.
+struct RayBatch {
+  RaySamples<double> samples;
+  Eigen::MatrixXd target;      // R × 3
+  Eigen::MatrixXd background;  // 1 × 3, or R × 3
+};
+
+// The rays of groups [k0, k1) as samples of their own (offsets from the block's first point).
+RaySamples<double> block_samples(const RaySamples<double>& all, size_t k0, size_t k1,
+                                 Eigen::Index first) {
+  RaySamples<double> local;
+  local.offsets.resize(k1 - k0 + 1);
+  for (size_t k = k0; k <= k1; ++k) local.offsets[k - k0] = all.offsets[k] - first;
+  const Eigen::Index begin = all.offsets[k0], count = all.offsets[k1] - begin;
+  local.t = all.t.segment(begin, count);
+  local.delta = all.delta.segment(begin, count);
+  return local;
+}
+
+class RayColourResidual final : public Residual {
+ public:
+  RayColourResidual(std::shared_ptr<const RayBatch> batch, DensityActivation density)
+      : batch_(std::move(batch)), density_(density) {}
+
+  int components() const override { return 3; }
+
+  void evaluate(Eigen::Index first, const StreamLayout&, const Streams<double>& out,
+                Eigen::MatrixXd& r) const override {
+    const Block b = block(first, out);
+    const auto result = integrators::render<double>(b.samples, b.sigma, b.rgb, b.background);
+    r = result.color - batch_->target.middleRows(b.k0, b.k1 - b.k0);
+  }
+
+  void backward(Eigen::Index first, const StreamLayout&, const Streams<double>& out,
+                const Eigen::MatrixXd& r_bar, Streams<double>& adjoint) const override {
+    const Block b = block(first, out);
+    integrators::RenderAdjoint<double> bar;
+    bar.color = r_bar;
+    Eigen::VectorXd sigma_bar(b.sigma.size());
+    Eigen::MatrixXd rgb_bar(b.rgb.rows(), 3);
+    integrators::render_backward<double>(b.samples, b.sigma, b.rgb, b.background, bar, sigma_bar,
+                                         rgb_bar);
+    const Eigen::Index offset = b.samples_begin;
+    auto value = out.stream(0);
+    auto value_bar = adjoint.stream(0);
+    for (Eigen::Index i = 0; i < b.sigma.size(); ++i) {
+      value_bar(offset + i, 0) += sigma_bar(i) * density_.derivative(value(offset + i, 0));
+      for (int c = 0; c < 3; ++c) {
+        const double rgb = b.rgb(i, c);
+        value_bar(offset + i, 1 + c) += rgb_bar(i, c) * rgb * (1 - rgb);
+      }
+    }
+  }
+
+ private:
+  struct Block {
+    size_t k0 = 0, k1 = 0;
+    Eigen::Index samples_begin = 0;  // row of the block's first sample in `out`
+    RaySamples<double> samples;
+    Eigen::VectorXd sigma;
+    Eigen::MatrixXd rgb, background;
+  };
+
+  Block block(Eigen::Index first, const Streams<double>& out) const {
+    const RaySamples<double>& all = batch_->samples;
+    Block b;
+    std::tie(b.k0, b.k1) = autodiff::groups_in_block(all.offsets, first, out.points);
+    b.samples = block_samples(all, b.k0, b.k1, all.offsets[b.k0]);
+    b.samples_begin = all.offsets[b.k0] - first;
+    const Eigen::Index n = b.samples.size();
+    const auto value = out.stream(0).middleRows(b.samples_begin, n);
+    b.sigma = value.col(0).unaryExpr([this](double s) { return density_.value(s); });
+    b.rgb = value.middleCols(1, 3).unaryExpr([](double z) { return sigmoid(z); });
+    b.background = batch_->background.rows() == 1
+                       ? batch_->background
+                       : Eigen::MatrixXd(batch_->background.middleRows(b.k0, b.k1 - b.k0));
+    return b;
+  }
+
+  std::shared_ptr<const RayBatch> batch_;
+  DensityActivation density_;
+};
+
+class Nerf final : public Problem {
+ public:
+  explicit Nerf(const ProblemContext& context) : domain_(scene_domain(context.root.child("scene"))) {
+    const io::ConfigNode scene = context.root.child("scene");
+    box_.lower = Eigen::Vector3d(domain_.lower().data());
+    box_.upper = Eigen::Vector3d(domain_.upper().data());
+    near_ = scene.get_or("near", 0.0);
+    scene.require("near", near_ >= 0 && std::isfinite(near_), "expected a number >= 0");
+    scene.reject_unknown_keys();
+
+    const io::ConfigNode data = context.root.child("data");
+    const std::string background = data.get_choice("background", {"white", "black", "random"}, "white");
+    background_ = background == "white" ? Background::kWhite
+                  : background == "black" ? Background::kBlack
+                                          : Background::kRandom;
+    integrators::DatasetOptions dataset;
+    dataset.background = background_ == Background::kBlack ? Eigen::Vector3d::Zero()
+                                                           : Eigen::Vector3d::Ones();
+    train_ = std::make_shared<integrators::MultiviewDataset>(
+        read(data, "train", context.config_dir, dataset));
+    if (data.has("test")) {
+      integrators::DatasetOptions test = dataset;
+      if (background_ == Background::kRandom) test.background = Eigen::Vector3d::Ones();
+      test_ = std::make_shared<integrators::MultiviewDataset>(read(data, "test", context.config_dir, test));
+    }
+    data.reject_unknown_keys();
+
+    const io::ConfigNode render = context.root.child_or_empty("render");
+    samples_ = render.has("samples") ? render.get_in_range("samples", 1, 4096) : 64;
+    density_.truncated_exp = render.get_choice("density", {"softplus", "trunc_exp"}, "softplus") == "trunc_exp";
+    render.reject_unknown_keys();
+  }
+
+  const Domain& domain() const override { return domain_; }
+  int field_input_dim() const override { return 6; }
+  int output_dim() const override { return 4; }
+  std::vector<std::string> output_names() const override { return {"density", "red", "green", "blue"}; }
+  int residual_term() const override { return -1; }
+  bool writes_grid_outputs() const override { return false; }
+
+  std::vector<LossTerm> loss_terms() const override {
+    LossTerm rgb;
+    rgb.name = "rgb";
+    rgb.batch_key = "rays";
+    rgb.spec = autodiff::StreamSpec::values(6);
+    rgb.sample = [this](Random& rng, Eigen::Index rays) { return draw(rng, rays); };
+    const DensityActivation density = density_;
+    rgb.residual = [density](const TermPoints& points) -> std::unique_ptr<Residual> {
+      auto batch = std::static_pointer_cast<const RayBatch>(points.context);
+      if (!batch) throw std::logic_error("nerf: a ray residual needs the batch it was drawn with");
+      return std::make_unique<RayColourResidual>(std::move(batch), density);
+    };
+    return {rgb};
+  }
+
+  void write_outputs(const OutputContext& context,
+                     std::vector<std::pair<std::string, double>>& metrics) const override {
+    if (!test_) return;
+    const std::filesystem::path views = context.dir / "test_views";
+    std::filesystem::create_directories(views);
+    double psnr_sum = 0, ssim_sum = 0;
+    const int width = test_->intrinsics.width, height = test_->intrinsics.height;
+    for (size_t f = 0; f < test_->frames.size(); ++f) {
+      const View view = render_view(context, *test_, static_cast<int>(f));
+      const Eigen::MatrixXf& truth = test_->frames[f].rgb;
+      const double psnr = io::psnr(view.rgb, truth);
+      const double ssim = io::ssim(view.rgb, truth, width, height);
+      char name[64];
+      std::snprintf(name, sizeof name, "test_%03zu", f);
+      metrics.emplace_back(std::string("psnr_") + name, psnr);
+      metrics.emplace_back(std::string("ssim_") + name, ssim);
+      psnr_sum += psnr;
+      ssim_sum += ssim;
+      write_view(views / name, view, truth, width, height);
+    }
+    const auto n = static_cast<double>(test_->frames.size());
+    metrics.emplace_back("psnr_mean", psnr_sum / n);
+    metrics.emplace_back("ssim_mean", ssim_sum / n);
+    std::printf("test views: mean PSNR %.2f dB, mean SSIM %.4f over %zu views (%s)\n",
+                psnr_sum / n, ssim_sum / n, test_->frames.size(), views.string().c_str());
+  }
+
+ private:
+  struct View {
+    Eigen::MatrixXf rgb;      // pixels × 3
+    Eigen::VectorXf opacity;  // pixels
+    Eigen::VectorXf depth;    // pixels: expected distance given a hit
+  };
+
+  static Domain scene_domain(const io::ConfigNode& scene) {
+    const std::vector<double> lower = scene.get_list<double>("lower", 3),
+                              upper = scene.get_list<double>("upper", 3);
+    for (int a = 0; a < 3; ++a)
+      scene.require("upper", upper[a] > lower[a], "expected upper > lower on every axis");
+    return Domain(lower, upper);
+  }
+
+  static integrators::MultiviewDataset read(const io::ConfigNode& data, const char* key,
+                                            const std::filesystem::path& dir,
+                                            const integrators::DatasetOptions& options) {
+    try {
+      return integrators::read_transforms(dir / data.get<std::string>(key), options);
+    } catch (const integrators::DatasetError& e) {
+      throw data.error(key, e.what());
+    }
+  }
+
+  TermPoints draw(Random& rng, Eigen::Index rays) const {
+    std::mt19937_64 engine(rng());
+    integrators::PixelBatch<double> pixels = integrators::sample_pixels<double>(*train_, rays, engine);
+    integrators::clip_to_box(pixels.rays, box_, near_);
+    auto batch = std::make_shared<RayBatch>();
+    batch->samples = integrators::stratified_samples(pixels.rays, {samples_, true}, engine);
+    if (background_ == Background::kRandom) {
+      batch->background.resize(rays, 3);
+      for (Eigen::Index i = 0; i < batch->background.size(); ++i)
+        batch->background.data()[i] = static_cast<double>(engine() >> 11) * 0x1.0p-53;
+      batch->target = integrators::composite_on<double>(pixels, batch->background);
+    } else {
+      batch->background = pixels.background.transpose();
+      batch->target = pixels.rgb;
+    }
+    TermPoints points;
+    points.x.resize(batch->samples.size(), 6);
+    points.x << integrators::sample_points(pixels.rays, batch->samples),
+        integrators::sample_directions(pixels.rays, batch->samples);
+    points.groups = batch->samples.offsets;
+    points.context = std::move(batch);
+    return points;
+  }
+
+  View render_view(const OutputContext& context, const integrators::MultiviewDataset& data,
+                   int frame) const {
+    integrators::PixelBatch<double> pixels = integrators::frame_pixels<double>(data, frame);
+    integrators::clip_to_box(pixels.rays, box_, near_);
+    std::mt19937_64 unused(0);
+    const RaySamples<double> samples =
+        integrators::stratified_samples(pixels.rays, {samples_, false}, unused);
+    Eigen::MatrixXd x(samples.size(), 6);
+    x << integrators::sample_points(pixels.rays, samples), integrators::sample_directions(pixels.rays, samples);
+    const Eigen::MatrixXd out = context.values(x);
+    const Eigen::VectorXd sigma = out.col(0).unaryExpr([this](double s) { return density_.value(s); });
+    const Eigen::MatrixXd rgb = out.middleCols(1, 3).unaryExpr([](double z) { return sigmoid(z); });
+    const Eigen::MatrixXd background = data.background.transpose();
+    const auto result = integrators::render<double>(samples, sigma, rgb, background);
+    View view;
+    view.rgb = result.color.cast<float>();
+    view.opacity = result.opacity.cast<float>();
+    view.depth = (result.depth.array() / result.opacity.array().max(1e-6)).cast<float>();
+    return view;
+  }
+
+  static void write_view(const std::filesystem::path& stem, const View& view,
+                         const Eigen::MatrixXf& truth, int width, int height) {
+    auto image = [&](Eigen::MatrixXf pixels) {
+      io::Image i;
+      i.width = width;
+      i.height = height;
+      i.channels = static_cast<int>(pixels.cols());
+      i.pixels = std::move(pixels);
+      return i;
+    };
+    io::write_png(stem.string() + "_render.png", image(view.rgb));
+    io::write_png(stem.string() + "_truth.png", image(truth));
+    // |error| × 4 so that small errors show.
+    io::write_png(stem.string() + "_error.png", image((4 * (view.rgb - truth).cwiseAbs()).eval()));
+    io::write_png(stem.string() + "_opacity.png", image(view.opacity));
+    // Depth of the pixels the object covers, near dark and far light; misses white.
+    const Eigen::ArrayXf hit = (view.opacity.array() > 0.5f).cast<float>();
+    const float near = (hit > 0).select(view.depth.array(), INFINITY).minCoeff();
+    const float far = (hit > 0).select(view.depth.array(), -INFINITY).maxCoeff();
+    const Eigen::VectorXf depth =
+        (hit > 0).select((view.depth.array() - near) / std::max(far - near, 1e-6f), 1.0f);
+    io::write_png(stem.string() + "_depth.png", image(depth));
+  }
+
+  Domain domain_;
+  integrators::SceneBox box_;
+  double near_ = 0;
+  Background background_ = Background::kWhite;
+  std::shared_ptr<const integrators::MultiviewDataset> train_, test_;
+  int samples_ = 64;
+  DensityActivation density_;
+};
+
+}  // namespace
+
+std::unique_ptr<Problem> make_nerf(const ProblemContext& context) {
+  return std::make_unique<Nerf>(context);
+}
+
+}  // namespace nfield::solvers
