@@ -1,0 +1,175 @@
+// SPDX-License-Identifier: MIT
+//
+// problem: nerf. The ray residual's adjoint (volume rendering and the output activations)
+// against central differences, the same rows whatever block a ray falls in, a short training
+// run that lowers the loss and writes test views, and config and data errors that name the
+// file, line and key.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include <nlohmann/json.hpp>
+
+#include "autodiff/sequential.h"
+#include "io/png_image.h"
+#include "solvers/run.h"
+#include "tests/testing/config_errors.h"
+#include "tests/testing/scratch.h"
+
+namespace nfield::solvers {
+namespace {
+
+const std::filesystem::path kBunny = std::filesystem::path(NFIELD_SOURCE_DIR) / "data/multiview/bunny_blender";
+
+std::string nerf_config(const std::string& data, const std::string& extra = "") {
+  return "problem: nerf\n"
+         "data:\n" + data +
+         "scene: {lower: [-0.6, -0.6, -0.6], upper: [0.6, 0.6, 0.6]}\n"
+         "render: {samples: 16}\n"
+         "field: {type: nerf, hidden: [32, 32], color_hidden: [16], encoding: {type: positional, frequencies: 6}}\n"
+         "training:\n"
+         "  batch: {rays: 256}\n"
+         "  stages: [{optimizer: adam, steps: 60, lr: 5.0e-3}]\n" + extra;
+}
+
+std::string bunny_data(bool test = false) {
+  std::string s = "  train: " + (kBunny / "transforms_train.json").string() + "\n";
+  if (test) s += "  test: " + (kBunny / "transforms_test.json").string() + "\n";
+  return s;
+}
+
+TEST(Nerf, RayResidualAdjointMatchesCentralDifferences) {
+  const auto config = testutil::write_config("nerf", nerf_config(bunny_data(), "output: {dir: unused}\n"));
+  const RunSetup setup = load_run(config, {});
+  const std::vector<LossTerm> terms = setup.problem->loss_terms();
+  ASSERT_EQ(terms.size(), 1u);
+  Random rng(3);
+  const TermPoints points = terms[0].sample(rng, 12);
+  ASSERT_EQ(points.groups.size(), 13u);
+  ASSERT_EQ(points.x.cols(), 6);
+  ASSERT_GT(points.x.rows(), 12 * 8);  // most rays cross the scene box
+  const auto residual = terms[0].residual(points);
+
+  std::mt19937_64 engine(5);
+  auto uniform = [&engine] { return static_cast<double>(engine() >> 11) * 0x1.0p-53 - 0.5; };
+  const autodiff::StreamLayout layout(autodiff::StreamSpec::values(6));
+  Streams<double> out;
+  out.resize(points.x.rows(), 1, 4);
+  for (Eigen::Index i = 0; i < out.data.size(); ++i) out.data.data()[i] = 4 * uniform();
+  Eigen::MatrixXd r_bar(12, 3), r;
+  for (Eigen::Index i = 0; i < r_bar.size(); ++i) r_bar.data()[i] = uniform();
+  Streams<double> adjoint;
+  adjoint.resize(out.points, 1, 4);
+  adjoint.data.setZero();
+  residual->evaluate(0, layout, out, r);
+  ASSERT_EQ(r.rows(), 12);
+  ASSERT_EQ(r.cols(), 3);
+  residual->backward(0, layout, out, r_bar, adjoint);
+
+  Eigen::MatrixXd v(out.data.rows(), 4);
+  for (Eigen::Index i = 0; i < v.size(); ++i) v.data()[i] = uniform();
+  auto objective = [&](double h) {
+    Streams<double> moved = out;
+    moved.data += h * v;
+    Eigen::MatrixXd rh;
+    residual->evaluate(0, layout, moved, rh);
+    return (r_bar.array() * rh.array()).sum();
+  };
+  const double h = 1e-6, fd = (objective(h) - objective(-h)) / (2 * h);
+  const double reverse = (adjoint.data.array() * v.array()).sum();
+  EXPECT_NEAR(reverse, fd, 1e-7 * (1 + std::abs(fd)));
+
+  // The rows of the rays in a block do not depend on where the block starts.
+  const Eigen::Index cut = points.groups[5];
+  Streams<double> tail;
+  tail.resize(out.points - cut, 1, 4);
+  tail.data = out.data.bottomRows(out.points - cut);
+  Eigen::MatrixXd r_tail;
+  residual->evaluate(cut, layout, tail, r_tail);
+  ASSERT_EQ(r_tail.rows(), 7);
+  EXPECT_EQ(r_tail, r.bottomRows(7));
+}
+
+TEST(Nerf, ShortTrainingLowersTheLossAndWritesTestViews) {
+  const auto dir = testutil::scratch_dir("nerf");
+  const auto config = testutil::write_config(
+      "nerf_run", nerf_config(bunny_data(true), "output: {dir: " + dir.string() + "}\n"));
+  RunSetup setup = load_run(config, {});
+  ASSERT_EQ(execute_run(setup, {}), 0);
+  std::ifstream in(dir / "metrics.json");
+  const auto metrics = nlohmann::json::parse(in);
+  // One step's loss is about 0.35 from a fresh field; 60 steps bring it well below.
+  EXPECT_LT(metrics["loss"].get<double>(), 0.05);
+  EXPECT_GT(metrics["psnr_mean"].get<double>(), 14.0);
+  EXPECT_GT(metrics["ssim_mean"].get<double>(), 0.6);
+  for (const char* suffix : {"render", "truth", "error", "depth", "opacity"})
+    EXPECT_TRUE(std::filesystem::exists(dir / "test_views" / (std::string("test_007_") + suffix + ".png"))) << suffix;
+  const io::Image render = io::read_png(dir / "test_views/test_000_render.png");
+  EXPECT_EQ(render.width, 128);
+  EXPECT_EQ(render.height, 128);
+  EXPECT_FALSE(std::filesystem::exists(dir / "solution.vti"));
+}
+
+// A copy of the bunny's transforms with `edit` applied, in a scratch folder whose images
+// point back at the real ones.
+std::filesystem::path edited_transforms(const std::filesystem::path& dir,
+                                        const std::function<void(nlohmann::json&)>& edit) {
+  std::ifstream in(kBunny / "transforms_train.json");
+  nlohmann::json j = nlohmann::json::parse(in);
+  for (auto& frame : j["frames"])
+    frame["file_path"] = (kBunny / frame["file_path"].get<std::string>()).string();
+  edit(j);
+  const auto path = dir / "transforms.json";
+  std::ofstream(path) << j.dump(1);
+  return path;
+}
+
+void expect_data_error(const std::filesystem::path& transforms, const std::string& part) {
+  const auto config = transforms.parent_path() / "config.yaml";
+  std::ofstream(config) << nerf_config("  train: " + transforms.string() + "\n");
+  testutil::expect_located_error(config, {3, 10, "data.train", part});
+}
+
+TEST(Nerf, DataErrorsNameTheFileAndKey) {
+  const auto dir = testutil::scratch_dir("nerf");
+  expect_data_error(dir / "missing.json", "missing.json");
+  expect_data_error(edited_transforms(dir, [](nlohmann::json& j) { j["frames"] = nlohmann::json::array(); }),
+                    "no frames");
+  expect_data_error(edited_transforms(dir, [](nlohmann::json& j) { j["frames"][2].erase("transform_matrix"); }),
+                    "frames[2].transform_matrix");
+  {
+    io::Image small;
+    small.width = small.height = 64;
+    small.channels = 4;
+    small.pixels = Eigen::MatrixXf::Constant(64 * 64, 4, 0.5f);
+    io::write_png(dir / "small.png", small);
+    expect_data_error(edited_transforms(dir, [&](nlohmann::json& j) {
+                        j["frames"][1]["file_path"] = (dir / "small.png").string();
+                      }),
+                      "small.png");
+  }
+  std::ofstream(dir / "broken.json") << "{\"camera_angle_x\": 0.7, \"frames\": [";
+  expect_data_error(dir / "broken.json", "malformed");
+  expect_data_error(edited_transforms(dir, [](nlohmann::json& j) {
+                      j["frames"][0]["file_path"] = "./no_such_image";
+                    }),
+                    "no_such_image");
+}
+
+TEST(Nerf, ConfigErrorsAreLocated) {
+  auto check = [](const std::string& text, const testutil::Located& want) {
+    testutil::expect_located_error(testutil::write_config("nerf", text), want);
+  };
+  check(nerf_config(bunny_data() + "  background: green\n"), {4, 15, "data.background", "white"});
+  std::string bad_render = nerf_config(bunny_data());
+  bad_render.replace(bad_render.find("render: {samples: 16}"), 21, "render: {samples: 16, sample: 3}");
+  check(bad_render, {5, 23, "render", "unknown key 'sample'"});
+  std::string flat = nerf_config(bunny_data());
+  flat.replace(flat.find("upper: [0.6, 0.6, 0.6]"), 22, "upper: [0.6, -0.6, 0.6]");
+  check(flat, {4, 43, "scene.upper", "upper > lower"});
+}
+
+}  // namespace
+}  // namespace nfield::solvers
