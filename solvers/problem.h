@@ -57,6 +57,22 @@ class Problem {
   // after every training stage; write_outputs reports the same number after the last.
   virtual std::optional<double> reported_error(const OutputContext&) const { return std::nullopt; }
 
+  // The field being trained, for problems that sample where it is (a radiance field's
+  // occupancy grid): values (n × output_dim) at n × field_input_dim() points. The program
+  // calls this once before training; `values` stays valid until training ends.
+  using FieldValues = std::function<Eigen::MatrixXd(const Eigen::MatrixXd&)>;
+  virtual void watch_field(FieldValues values) { (void)values; }
+
+  // Figures for the progress line (a radiance field's PSNR on a held-out view, rays per
+  // second), computed at most every few seconds by the program; `progress` is the step just
+  // reported. Empty: none.
+  virtual std::vector<std::pair<std::string, double>> progress_metrics(
+      const OutputContext& context, double steps_per_second) const {
+    (void)context;
+    (void)steps_per_second;
+    return {};
+  }
+
   // Whether the field is written on the output grid over the domain (solution.vti and its
   // PNG, grid errors): false for fields whose inputs are not the domain's coordinates.
   virtual bool writes_grid_outputs() const { return true; }

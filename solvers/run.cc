@@ -141,6 +141,7 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
                                 return ansatz ? ansatz->values(x, n) : n;
                               },
                               setup.output.grid};
+  setup.problem->watch_field(context.values);
   const auto started = std::chrono::steady_clock::now();
   bool finished;
   {
@@ -148,7 +149,20 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
     ProgressPrinter printer({.log_every = setup.training.log_every});
     typename Trainer<Scalar>::Callbacks callbacks;
     callbacks.stop_requested = [] { return g_signal.load() != 0; };
-    callbacks.progress = [&printer](const Progress& p) { printer.step(p); };
+    // The problem's own progress figures, refreshed at most every 10 s (they may render).
+    std::vector<std::pair<std::string, double>> problem_figures;
+    auto figured = std::chrono::steady_clock::now();
+    callbacks.progress = [&](const Progress& p) {
+      const auto now = std::chrono::steady_clock::now();
+      if (now - figured >= std::chrono::seconds(10)) {
+        problem_figures = setup.problem->progress_metrics(context, p.steps_per_second);
+        figured = std::chrono::steady_clock::now();
+      }
+      if (problem_figures.empty()) return printer.step(p);
+      Progress shown = p;
+      shown.extras.insert(shown.extras.end(), problem_figures.begin(), problem_figures.end());
+      printer.step(shown);
+    };
     callbacks.stage_begins = [&printer](const Progress& p) { printer.stage_begins(p); };
     callbacks.stage_error = [&] {
       if (const std::optional<double> error = setup.problem->reported_error(context)) return *error;
