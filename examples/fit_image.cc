@@ -82,7 +82,7 @@ int main(int argc, char** argv) {
   const auto start = std::chrono::steady_clock::now();
   for (int step = 1; step <= steps; ++step) {
     gradient.setZero();
-    mse = field.network().value_and_gradient(field.parameters().data(), values, coords, loss, gradient.data());
+    mse = field.value_and_gradient(field.parameters().data(), values, autodiff::Batch<float>{coords}, loss, gradient.data());
     adam.step(field.parameters().data(), gradient.data());
     if (step == 1 || step % std::max(1, steps / 10) == 0 || step == steps)
       std::printf("step %5d  PSNR %6.2f dB  (%.1f s)\n", step, psnr(mse),
