@@ -53,6 +53,18 @@ std::string edit(const std::string& from, const std::string& to, std::string tex
   return text.replace(at, from.size(), to);
 }
 
+const std::string kNerfTrain =
+    "  train: " NFIELD_SOURCE_DIR "/data/multiview/bunny_blender/transforms_train.json\n";
+
+// A radiance-field config with the given `data:` entries and `render:` extras.
+std::string nerf(const std::string& data, const std::string& render = "") {
+  return "problem: nerf\ndata:\n" + data +
+         "scene: {lower: [-0.6, -0.6, -0.6], upper: [0.6, 0.6, 0.6]}\n"
+         "render:\n  samples: 8\n" + render +
+         "field: {type: nerf, hidden: [8], color_hidden: [8]}\n"
+         "training:\n  batch: {rays: 16}\n  stages: [{optimizer: adam, steps: 2, lr: 1.0e-3}]\n";
+}
+
 struct BadConfig {
   std::string name;
   std::string yaml;
@@ -142,7 +154,7 @@ std::vector<BadConfig> bad_configs() {
       {"BadProblem", edit("problem: poisson", "problem: poison"), "problem: |poison", "problem",
        {"expected one of ", "poisson", "wave", "; got 'poison'"}},
       {"BadFieldType", edit("type: siren", "type: sirenn"), "type: |sirenn", "field.type",
-       {"expected one of mlp, siren; got 'sirenn'"}},
+       {"expected one of mlp, nerf, siren; got 'sirenn'"}},
       {"BadActivation", edit("type: siren", "type: mlp\n  activation: swish"), "activation: |swish",
        "field.activation", {"expected one of ", "relu", "sine", "softplus", "tanh", "; got 'swish'"}},
       {"BadEncoding", edit("  hidden_omega: 1\n", "  hidden_omega: 1\n  encoding: {type: hash}\n"),
@@ -152,6 +164,13 @@ std::vector<BadConfig> bad_configs() {
        "training.precision", {"expected one of float, double; got 'half'"}},
       {"BadSchedule", edit("lr: 1.0e-3}", "lr: 1.0e-3, schedule: linear}"), "schedule: |linear",
        "training.stages[0].schedule", {"expected one of constant, cosine, exponential; got 'linear'"}},
+      // A radiance field: its data files and its sections.
+      {"NerfMissingTransforms", nerf("  train: missing/transforms.json\n"), "train: |missing",
+       "data.train", {"missing/transforms.json"}},
+      {"NerfBadBackground", nerf(kNerfTrain + "  background: grey\n"), "background: |grey",
+       "data.background", {"expected one of white, black, random; got 'grey'"}},
+      {"NerfUnknownOccupancyKey", nerf(kNerfTrain, "  occupancy: {resolution: 32, evry: 4}\n"),
+       "32, |evry", "render.occupancy", {"unknown key 'evry'", "every"}},
       // Expressions.
       {"UnbalancedExpression", edit("-2*pi^2*sin(pi*x)*sin(pi*y)", "-2*pi^2*sin(pi*x"),
        // muparser gives no position for a missing parenthesis: the value's start.
