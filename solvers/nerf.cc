@@ -15,6 +15,7 @@
 //   render:
 //     samples: 64                # stratified samples per ray (jittered in training)
 //     density: softplus          # softplus | trunc_exp: σ from the raw density output s
+//     surface: 10                # density of the isosurface written after training
 //     occupancy:                 # optional: skip empty space (integrators/occupancy_grid.h)
 //       resolution: 64           #   cells per axis
 //       every: 16                #   training steps between updates from the field's density
@@ -37,7 +38,8 @@
 // is updated from the field's density every `every` steps (Problem::watch_field) and is
 // rebuilt, not saved, on resume: every cell counts as occupied until the first update.
 //
-// Outputs: every test view rendered (midpoint samples), beside its ground truth, the error,
+// Outputs: the density σ on output.grid over the scene box as density.vti, its isosurface
+// σ = render.surface as surface.vtp and surface.ply (VTK flying edges); every test view rendered (midpoint samples), beside its ground truth, the error,
 // depth and opacity, as PNGs in test_views/; PSNR and SSIM per view and their means in
 // metrics.json, with the mean time to render a view. With an occupancy grid the views are
 // also rendered without it (the same march through every cell): render_ms_dense_mean and
@@ -56,6 +58,9 @@
 #include "integrators/scene_box.h"
 #include "integrators/volume_rendering.h"
 #include "io/image_metrics.h"
+#include "io/isosurface.h"
+#include "io/vtk_image.h"
+#include "io/vtk_polydata.h"
 #include "io/png_image.h"
 #include "solvers/problems.h"
 
@@ -196,6 +201,8 @@ class Nerf final : public Problem {
     const io::ConfigNode render = context.root.child_or_empty("render");
     samples_ = render.has("samples") ? render.get_in_range("samples", 1, 4096) : 64;
     density_.truncated_exp = render.get_choice("density", {"softplus", "trunc_exp"}, "softplus") == "trunc_exp";
+    surface_ = render.get_or("surface", surface_);
+    render.require("surface", surface_ > 0 && std::isfinite(surface_), "expected a density > 0");
     if (render.has("occupancy")) read_occupancy(render.child("occupancy"));
     render.reject_unknown_keys();
   }
@@ -237,6 +244,7 @@ class Nerf final : public Problem {
 
   void write_outputs(const OutputContext& context,
                      std::vector<std::pair<std::string, double>>& metrics) const override {
+    write_density(context, metrics);
     if (!test_) return;
     const std::filesystem::path views = context.dir / "test_views";
     std::filesystem::create_directories(views);
@@ -403,6 +411,29 @@ class Nerf final : public Problem {
     return view;
   }
 
+  void write_density(const OutputContext& context,
+                     std::vector<std::pair<std::string, double>>& metrics) const {
+    const io::Grid grid = io::make_grid(domain_.lower(), domain_.upper(), context.grid);
+    const Eigen::MatrixXd points = grid.points(3);
+    Eigen::VectorXd sigma(points.rows());
+    constexpr Eigen::Index kChunk = 1 << 16;
+    for (Eigen::Index start = 0; start < points.rows(); start += kChunk) {
+      const Eigen::Index count = std::min(kChunk, points.rows() - start);
+      FieldValues values = context.values;
+      Eigen::MatrixXd x(count, 6);
+      x.leftCols(3) = points.middleRows(start, count);
+      x.rightCols(3).setZero();
+      x.col(5).setOnes();
+      sigma.segment(start, count) = values(x).col(0).unaryExpr([this](double s) { return density_.value(s); });
+    }
+    io::write_vti(context.dir / "density.vti", grid, {{"density", sigma}}, io::Precision::kFloat32);
+    const io::TriangleMesh surface = io::extract_isosurface(grid, sigma, surface_, true);
+    io::write_vtp_mesh(context.dir / "surface.vtp", surface);
+    io::write_ply(context.dir / "surface.ply", surface);
+    metrics.emplace_back("surface_vertices", static_cast<double>(surface.vertices.rows()));
+    metrics.emplace_back("surface_triangles", static_cast<double>(surface.triangles.rows()));
+  }
+
   static integrators::PixelBatch<double> every_other(const integrators::PixelBatch<double>& all,
                                                     int width, int stride) {
     std::vector<Eigen::Index> keep;
@@ -449,6 +480,7 @@ class Nerf final : public Problem {
   Background background_ = Background::kWhite;
   std::shared_ptr<const integrators::MultiviewDataset> train_, test_;
   int samples_ = 64;
+  double surface_ = 10;
   DensityActivation density_;
   OccupancySettings occupancy_;
   std::unique_ptr<integrators::OccupancyGrid> grid_;  // null: stratified samples

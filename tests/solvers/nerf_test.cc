@@ -110,6 +110,8 @@ TEST(Nerf, ShortTrainingLowersTheLossAndWritesTestViews) {
   EXPECT_EQ(render.width, 128);
   EXPECT_EQ(render.height, 128);
   EXPECT_FALSE(std::filesystem::exists(dir / "solution.vti"));
+  for (const char* file : {"density.vti", "surface.vtp", "surface.ply", "checkpoint.h5"})
+    EXPECT_TRUE(std::filesystem::exists(dir / file)) << file;
 }
 
 // A copy of the bunny's transforms with `edit` applied, in a scratch folder whose images
