@@ -11,6 +11,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "io/config.h"
@@ -87,6 +88,11 @@ struct ProblemContext {
 };
 
 using ProblemFactory = std::function<std::unique_ptr<Problem>(const ProblemContext&)>;
+
+// Adds a problem family that `problem: NAME` then selects, from code outside the library
+// (an application's own equation): call before loading configs, from one thread. Throws
+// std::logic_error when NAME (case-insensitive) is taken.
+void register_problem(std::string_view name, ProblemFactory factory);
 
 // The problem named by `problem:`; ConfigError lists the valid names.
 std::unique_ptr<Problem> make_problem(const ProblemContext& context);

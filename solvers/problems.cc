@@ -14,8 +14,8 @@ void register_problems(Registry<ProblemFactory>& registry) {
 }
 
 namespace {
-const Registry<ProblemFactory>& problems() {
-  static const Registry<ProblemFactory> registry = [] {
+Registry<ProblemFactory>& problems() {
+  static Registry<ProblemFactory> registry = [] {
     Registry<ProblemFactory> r("problem");
     register_problems(r);
     return r;
@@ -23,6 +23,10 @@ const Registry<ProblemFactory>& problems() {
   return registry;
 }
 }  // namespace
+
+void register_problem(std::string_view name, ProblemFactory factory) {
+  problems().add(name, std::move(factory));
+}
 
 std::unique_ptr<Problem> make_problem(const ProblemContext& context) {
   const std::string name = context.root.get<std::string>("problem");

@@ -11,6 +11,7 @@
 
 #include "fields/field_io.h"
 #include "io/hdf5_file.h"
+#include "solvers/problems.h"
 #include "solvers/run.h"
 #include "solvers/trainer.h"
 #include "tests/testing/config_errors.h"
@@ -120,6 +121,50 @@ void expect_resume_bit_exact() {
 
 TEST(TrainerState, ResumedAdamRunIsBitExactDouble) { expect_resume_bit_exact<double>(); }
 TEST(TrainerState, ResumedAdamRunIsBitExactFloat) { expect_resume_bit_exact<float>(); }
+
+}  // namespace
+}  // namespace nfield::solvers
+
+namespace nfield::solvers {
+namespace {
+
+// An equation from outside the library: registered by name, then selected by `problem:`.
+class OwnEquation final : public Problem {
+ public:
+  explicit OwnEquation(const ProblemContext& context)
+      : domain_(Domain::from_config(context.root.child("domain"))) {}
+  const Domain& domain() const override { return domain_; }
+  std::vector<LossTerm> loss_terms() const override {
+    LossTerm fit;
+    fit.name = "fit";
+    fit.batch_key = "interior";
+    fit.spec = autodiff::StreamSpec::values(domain_.input_dim());
+    fit.sample = [this](Random& rng, Eigen::Index n) { return domain_.sample_interior(rng, n); };
+    fit.residual = [](const Eigen::MatrixXd& x) {
+      return std::make_unique<LinearResidual>(std::vector<LinearResidual::Term>{{0, 0, 0, Eigen::VectorXd::Ones(1)}},
+                                              x.col(0));
+    };
+    return {fit};
+  }
+
+ private:
+  Domain domain_;
+};
+
+TEST(ProblemRegistry, OutsideCodeRegistersAProblem) {
+  register_problem("Own_Equation", [](const ProblemContext& c) { return std::make_unique<OwnEquation>(c); });
+  EXPECT_THROW(register_problem("own_equation", make_poisson), std::logic_error);
+  const auto config = testutil::write_config(
+      "run_setup", "problem: OWN_EQUATION\n"
+                   "domain: {lower: [0, 0], upper: [1, 1]}\n"
+                   "field: {type: mlp, hidden: [8]}\n"
+                   "training:\n  batch: {interior: 32}\n  stages: [{optimizer: adam, steps: 2}]\n");
+  const RunSetup setup = load_run(config, {});
+  ASSERT_EQ(setup.problem->loss_terms().size(), 1u);
+  EXPECT_EQ(setup.problem->loss_terms()[0].name, "fit");
+  const std::vector<std::string> names = problem_names();
+  EXPECT_NE(std::find(names.begin(), names.end(), "own_equation"), names.end());
+}
 
 }  // namespace
 }  // namespace nfield::solvers
