@@ -10,7 +10,7 @@
 //   y_k    = Σ_{m=1..k} (dₘ / m!) (δᵐ)_k          (Taylor, Faà di Bruno in power form)
 //
 // where δ = (0, z₁, …, z_K) is a Taylor series without its constant and δᵐ its m-th
-// Cauchy power. The reverse rules are the adjoints of these (DESIGN.md lists them); they
+// Cauchy power. The reverse rules are the adjoints of these (docs/design.md lists them); they
 // read d₀ … d_{r+1} with r = StreamLayout::forward_order(), which is why a recording
 // forward pass keeps one derivative table more than it uses.
 //
