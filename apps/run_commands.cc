@@ -18,6 +18,14 @@ struct RunArguments {
   std::string resume;
 };
 
+struct RenderArguments {
+  std::string checkpoint;
+  std::string poses;
+  int frames = 36;
+  double elevation = 30;
+  std::string out;
+};
+
 struct EvalArguments {
   std::string checkpoint;
   int grid = 128;
@@ -74,6 +82,31 @@ void add_run_commands(CLI::App& app) {
     const std::filesystem::path out =
         eval->out.empty() ? std::filesystem::path(eval->checkpoint).parent_path() / "eval" : std::filesystem::path(eval->out);
     solvers::evaluate_checkpoint(eval->checkpoint, eval->grid, out);
+  });
+
+  auto render = std::make_shared<RenderArguments>();
+  CLI::App* render_command = app.add_subcommand(
+      "render", "Render views of a radiance-field checkpoint: the cameras of a transforms.json, or a turntable");
+  render_command->add_option("checkpoint", render->checkpoint, "A checkpoint.h5 from nfield run (problem: nerf)")
+      ->required()
+      ->check(CLI::ExistingFile)
+      ->check(kCheckpointFile);
+  render_command->add_option("--poses", render->poses, "A transforms.json whose frames give the cameras (images, when present, give PSNRs)")
+      ->check(CLI::ExistingFile);
+  render_command->add_option("--frames", render->frames, "Turntable: views around the scene")
+      ->check(CLI::Range(1, 10000))->capture_default_str();
+  render_command->add_option("--elevation", render->elevation, "Turntable: degrees above the horizontal plane")
+      ->check(CLI::Range(-89.0, 89.0))->capture_default_str();
+  render_command->add_option("--out", render->out, "Output folder (default: beside the checkpoint, render/)");
+  render_command->callback([render] {
+    const std::filesystem::path out = render->out.empty()
+                                          ? std::filesystem::path(render->checkpoint).parent_path() / "render"
+                                          : std::filesystem::path(render->out);
+    solvers::RenderRequest request;
+    request.poses = render->poses;
+    request.turntable_frames = render->frames;
+    request.elevation_degrees = render->elevation;
+    solvers::render_checkpoint(render->checkpoint, request, out);
   });
 }
 

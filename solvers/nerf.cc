@@ -49,6 +49,9 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <numbers>
+
+#include <Eigen/Geometry>
 
 #include "autodiff/sequential.h"
 #include "integrators/multiview_dataset.h"
@@ -227,6 +230,48 @@ class Nerf final : public Problem {
     return figures;
   }
 
+  void render_views(const OutputContext& context, const RenderRequest& request) const override {
+    std::vector<integrators::Camera> cameras;
+    std::vector<Eigen::MatrixXf> truths;
+    Eigen::Vector3d background = Eigen::Vector3d::Ones();
+    if (!request.poses.empty()) {
+      integrators::DatasetOptions options;
+      options.background = background_ == Background::kBlack ? Eigen::Vector3d::Zero() : Eigen::Vector3d::Ones();
+      const integrators::MultiviewDataset poses = integrators::read_transforms(request.poses, options);
+      background = poses.background;
+      for (const auto& frame : poses.frames) {
+        cameras.push_back(frame.camera);
+        truths.push_back(frame.rgb);
+      }
+    } else {
+      cameras = turntable(request);
+      if (background_ == Background::kBlack) background.setZero();
+    }
+    if (grid_) {
+      // The grid of the loaded field: one update at decay 0 holds just its densities.
+      grid_->update([&](const Eigen::MatrixXd& p) { return density_with(context.values, p); }, 0.0);
+    }
+    std::filesystem::create_directories(context.dir);
+    const int width = cameras.front().intrinsics.width, height = cameras.front().intrinsics.height;
+    double psnr_sum = 0;
+    for (size_t k = 0; k < cameras.size(); ++k) {
+      const auto started = std::chrono::steady_clock::now();
+      const View view = render_rays(context, integrators::image_rays<double>(cameras[k]), background, grid_.get());
+      const double ms = 1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+      char stem[64];
+      std::snprintf(stem, sizeof stem, "%s_%03zu", request.poses.empty() ? "turntable" : "view", k);
+      write_view(context.dir / stem, view, truths.empty() ? Eigen::MatrixXf() : truths[k], width, height);
+      if (truths.empty()) {
+        std::printf("%s: %zu/%zu rendered in %.0f ms\n", stem, k + 1, cameras.size(), ms);
+      } else {
+        const double psnr = io::psnr(view.rgb, truths[k]);
+        psnr_sum += psnr;
+        std::printf("%s: %zu/%zu rendered in %.0f ms, PSNR %.2f dB\n", stem, k + 1, cameras.size(), ms, psnr);
+      }
+    }
+    if (!truths.empty()) std::printf("mean PSNR %.2f dB over %zu views\n", psnr_sum / cameras.size(), cameras.size());
+  }
+
   std::vector<LossTerm> loss_terms() const override {
     LossTerm rgb;
     rgb.name = "rgb";
@@ -317,13 +362,14 @@ class Nerf final : public Problem {
   }
 
   // σ at points (N × 3): the density does not depend on the direction, any will do.
-  Eigen::VectorXd density_at(const Eigen::MatrixXd& points) const {
+  Eigen::VectorXd density_with(const FieldValues& values, const Eigen::MatrixXd& points) const {
     Eigen::MatrixXd x(points.rows(), 6);
     x.leftCols(3) = points;
     x.rightCols(3).setZero();
     x.col(5).setOnes();
-    return field_(x).col(0).unaryExpr([this](double s) { return density_.value(s); });
+    return values(x).col(0).unaryExpr([this](double s) { return density_.value(s); });
   }
+  Eigen::VectorXd density_at(const Eigen::MatrixXd& points) const { return density_with(field_, points); }
 
   struct View {
     Eigen::MatrixXf truth;    // pixels × 3: the ground truth of the pixels rendered
@@ -391,20 +437,27 @@ class Nerf final : public Problem {
                    int frame, const integrators::OccupancyGrid* grid, int stride = 1) const {
     integrators::PixelBatch<double> pixels = integrators::frame_pixels<double>(data, frame);
     if (stride > 1) pixels = every_other(pixels, data.intrinsics.width, stride);
-    integrators::clip_to_box(pixels.rays, box_, near_);
+    View view = render_rays(context, std::move(pixels.rays), data.background, grid);
+    view.truth = pixels.rgb.cast<float>();
+    return view;
+  }
+
+  // Rays (clipped to the box here) marched through `grid` or sampled at the stratified
+  // midpoints, rendered on `background`.
+  View render_rays(const OutputContext& context, integrators::Rays<double> rays,
+                   const Eigen::Vector3d& background, const integrators::OccupancyGrid* grid) const {
+    integrators::clip_to_box(rays, box_, near_);
     std::mt19937_64 unused(0);
     const RaySamples<double> samples =
-        grid ? grid->march(pixels.rays, occupancy_.march)
-             : integrators::stratified_samples(pixels.rays, {samples_, false}, unused);
+        grid ? grid->march(rays, occupancy_.march)
+             : integrators::stratified_samples(rays, {samples_, false}, unused);
     Eigen::MatrixXd x(samples.size(), 6);
-    x << integrators::sample_points(pixels.rays, samples), integrators::sample_directions(pixels.rays, samples);
+    x << integrators::sample_points(rays, samples), integrators::sample_directions(rays, samples);
     const Eigen::MatrixXd out = context.values(x);
     const Eigen::VectorXd sigma = out.col(0).unaryExpr([this](double s) { return density_.value(s); });
     const Eigen::MatrixXd rgb = out.middleCols(1, 3).unaryExpr([](double z) { return sigmoid(z); });
-    const Eigen::MatrixXd background = data.background.transpose();
-    const auto result = integrators::render<double>(samples, sigma, rgb, background);
+    const auto result = integrators::render<double>(samples, sigma, rgb, background.transpose());
     View view;
-    view.truth = pixels.rgb.cast<float>();
     view.rgb = result.color.cast<float>();
     view.opacity = result.opacity.cast<float>();
     view.depth = (result.depth.array() / result.opacity.array().max(1e-6)).cast<float>();
@@ -419,12 +472,7 @@ class Nerf final : public Problem {
     constexpr Eigen::Index kChunk = 1 << 16;
     for (Eigen::Index start = 0; start < points.rows(); start += kChunk) {
       const Eigen::Index count = std::min(kChunk, points.rows() - start);
-      FieldValues values = context.values;
-      Eigen::MatrixXd x(count, 6);
-      x.leftCols(3) = points.middleRows(start, count);
-      x.rightCols(3).setZero();
-      x.col(5).setOnes();
-      sigma.segment(start, count) = values(x).col(0).unaryExpr([this](double s) { return density_.value(s); });
+      sigma.segment(start, count) = density_with(context.values, points.middleRows(start, count));
     }
     io::write_vti(context.dir / "density.vti", grid, {{"density", sigma}}, io::Precision::kFloat32);
     const io::TriangleMesh surface = io::extract_isosurface(grid, sigma, surface_, true);
@@ -432,6 +480,36 @@ class Nerf final : public Problem {
     io::write_ply(context.dir / "surface.ply", surface);
     metrics.emplace_back("surface_vertices", static_cast<double>(surface.vertices.rows()));
     metrics.emplace_back("surface_triangles", static_cast<double>(surface.triangles.rows()));
+  }
+
+  // Cameras on a circle around the scene box's centre at the training cameras' mean distance,
+  // `elevation` above the x–z plane (the data's up is +y), looking at the centre, with the
+  // training views' intrinsics.
+  std::vector<integrators::Camera> turntable(const RenderRequest& request) const {
+    const Eigen::Vector3d centre = 0.5 * (box_.lower + box_.upper);
+    double radius = 0;
+    for (const auto& frame : train_->frames) radius += (frame.camera.centre() - centre).norm();
+    radius /= static_cast<double>(train_->frames.size());
+    const double elevation = request.elevation_degrees * std::numbers::pi / 180;
+    std::vector<integrators::Camera> cameras;
+    for (int k = 0; k < request.turntable_frames; ++k) {
+      const double azimuth = 2 * std::numbers::pi * k / request.turntable_frames;
+      const Eigen::Vector3d eye = centre + radius * Eigen::Vector3d(std::cos(elevation) * std::sin(azimuth),
+                                                                     std::sin(elevation),
+                                                                     std::cos(elevation) * std::cos(azimuth));
+      // OpenGL camera axes: x right, y up, looking along −z.
+      const Eigen::Vector3d back = (eye - centre).normalized();
+      const Eigen::Vector3d right = Eigen::Vector3d::UnitY().cross(back).normalized();
+      const Eigen::Vector3d up = back.cross(right);
+      integrators::Camera camera;
+      camera.intrinsics = train_->intrinsics;
+      camera.camera_to_world.block<3, 1>(0, 0) = right;
+      camera.camera_to_world.block<3, 1>(0, 1) = up;
+      camera.camera_to_world.block<3, 1>(0, 2) = back;
+      camera.camera_to_world.block<3, 1>(0, 3) = eye;
+      cameras.push_back(camera);
+    }
+    return cameras;
   }
 
   static integrators::PixelBatch<double> every_other(const integrators::PixelBatch<double>& all,
@@ -461,9 +539,11 @@ class Nerf final : public Problem {
       return i;
     };
     io::write_png(stem.string() + "_render.png", image(view.rgb));
-    io::write_png(stem.string() + "_truth.png", image(truth));
-    // |error| × 4 so that small errors show.
-    io::write_png(stem.string() + "_error.png", image((4 * (view.rgb - truth).cwiseAbs()).eval()));
+    if (truth.size() > 0) {
+      io::write_png(stem.string() + "_truth.png", image(truth));
+      // |error| × 4 so that small errors show.
+      io::write_png(stem.string() + "_error.png", image((4 * (view.rgb - truth).cwiseAbs()).eval()));
+    }
     io::write_png(stem.string() + "_opacity.png", image(view.opacity));
     // Depth of the pixels the object covers, near dark and far light; misses white.
     const Eigen::ArrayXf hit = (view.opacity.array() > 0.5f).cast<float>();

@@ -13,6 +13,10 @@ Eigen::Array<bool, Eigen::Dynamic, 1> Problem::error_mask(const Eigen::MatrixXd&
   return Eigen::Array<bool, Eigen::Dynamic, 1>::Constant(x.rows(), true);
 }
 
+void Problem::render_views(const OutputContext&, const RenderRequest&) const {
+  throw std::invalid_argument("this problem's field renders no images (nfield render takes a radiance-field checkpoint, problem: nerf)");
+}
+
 void Problem::write_outputs(const OutputContext&, std::vector<std::pair<std::string, double>>&) const {}
 
 }  // namespace nfield::solvers

@@ -27,6 +27,14 @@ struct OutputContext {
   std::vector<int> grid;  // output.grid
 };
 
+// What `nfield render` asks of a problem whose field renders images: the cameras of a
+// transforms.json (its images, when present, give PSNRs), or a turntable around the scene.
+struct RenderRequest {
+  std::filesystem::path poses;    // empty: a turntable
+  int turntable_frames = 36;      // ≥ 1
+  double elevation_degrees = 30;  // of the turntable's cameras above the horizontal plane
+};
+
 class Ansatz;
 
 class Problem {
@@ -73,6 +81,10 @@ class Problem {
     (void)steps_per_second;
     return {};
   }
+
+  // Renders views of the trained field into context.dir (`nfield render`). Problems whose
+  // fields are not radiance fields throw std::invalid_argument.
+  virtual void render_views(const OutputContext& context, const RenderRequest& request) const;
 
   // Whether the field is written on the output grid over the domain (solution.vti and its
   // PNG, grid errors): false for fields whose inputs are not the domain's coordinates.

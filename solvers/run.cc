@@ -317,9 +317,9 @@ int execute_run(RunSetup& setup, const std::filesystem::path& resume) {
                                               : train_and_write<float>(setup, resume);
 }
 
-void evaluate_checkpoint(const std::filesystem::path& checkpoint, int grid_points,
-                         const std::filesystem::path& out_dir) {
-  const io::H5Reader file(checkpoint);
+namespace {
+// The run a checkpoint was trained by: its config (copied into out_dir) and data folder.
+RunSetup checkpoint_run(const io::H5Reader& file, const std::filesystem::path& out_dir) {
   const std::string config_text = file.read_attribute<std::string>("/", "config");
   const std::filesystem::path config_copy = out_dir / "config.yaml";
   std::filesystem::create_directories(out_dir);
@@ -328,7 +328,32 @@ void evaluate_checkpoint(const std::filesystem::path& checkpoint, int grid_point
   const std::filesystem::path data_dir = file.has_attribute("/", "config_dir")
                                              ? std::filesystem::path(file.read_attribute<std::string>("/", "config_dir"))
                                              : std::filesystem::current_path();
-  RunSetup setup = load_run(config_copy, {}, out_dir, data_dir);
+  return load_run(config_copy, {}, out_dir, data_dir);
+}
+}  // namespace
+
+void render_checkpoint(const std::filesystem::path& checkpoint, const RenderRequest& request,
+                       const std::filesystem::path& out_dir) {
+  const io::H5Reader file(checkpoint);
+  RunSetup setup = checkpoint_run(file, out_dir);
+  // In the precision it was trained in (a float field renders about twice as fast).
+  if (setup.training.precision == "float") {
+    const fields::Field<float> field = fields::load_field<float>(file);
+    setup.problem->render_views(
+        {out_dir, [&field](const Eigen::MatrixXd& x) { return field.values(x.cast<float>()).cast<double>().eval(); },
+         setup.output.grid},
+        request);
+  } else {
+    const fields::Field<double> field = fields::load_field<double>(file);
+    setup.problem->render_views(
+        {out_dir, [&field](const Eigen::MatrixXd& x) { return field.values(x); }, setup.output.grid}, request);
+  }
+}
+
+void evaluate_checkpoint(const std::filesystem::path& checkpoint, int grid_points,
+                         const std::filesystem::path& out_dir) {
+  const io::H5Reader file(checkpoint);
+  RunSetup setup = checkpoint_run(file, out_dir);
   setup.output.grid.assign(setup.problem->domain().space_dim(), grid_points);
   const fields::Field<double> field = fields::load_field<double>(file);
   if (!setup.problem->writes_grid_outputs())

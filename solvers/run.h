@@ -62,4 +62,9 @@ int execute_run(RunSetup& setup, const std::filesystem::path& resume = {});
 void evaluate_checkpoint(const std::filesystem::path& checkpoint, int grid_points,
                          const std::filesystem::path& out_dir);
 
+// Renders views of a radiance-field checkpoint into out_dir (nfield render): the cameras of
+// `request.poses`, or a turntable. Throws for a checkpoint whose problem renders no images.
+void render_checkpoint(const std::filesystem::path& checkpoint, const RenderRequest& request,
+                       const std::filesystem::path& out_dir);
+
 }  // namespace nfield::solvers

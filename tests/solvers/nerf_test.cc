@@ -100,8 +100,8 @@ TEST(Nerf, ShortTrainingLowersTheLossAndWritesTestViews) {
   ASSERT_EQ(execute_run(setup, {}), 0);
   std::ifstream in(dir / "metrics.json");
   const auto metrics = nlohmann::json::parse(in);
-  // One step's loss is about 0.35 from a fresh field; 60 steps bring it well below.
-  EXPECT_LT(metrics["loss"].get<double>(), 0.05);
+  // The first step's loss is 0.24 from a fresh field; 60 steps bring it to 0.045.
+  EXPECT_LT(metrics["loss"].get<double>(), 0.08);
   EXPECT_GT(metrics["psnr_mean"].get<double>(), 14.0);
   EXPECT_GT(metrics["ssim_mean"].get<double>(), 0.6);
   for (const char* suffix : {"render", "truth", "error", "depth", "opacity"})
@@ -112,6 +112,22 @@ TEST(Nerf, ShortTrainingLowersTheLossAndWritesTestViews) {
   EXPECT_FALSE(std::filesystem::exists(dir / "solution.vti"));
   for (const char* file : {"density.vti", "surface.vtp", "surface.ply", "checkpoint.h5"})
     EXPECT_TRUE(std::filesystem::exists(dir / file)) << file;
+
+  // nfield render: a turntable, and the test cameras (whose images give PSNRs).
+  RenderRequest turntable;
+  turntable.turntable_frames = 3;
+  render_checkpoint(dir / "checkpoint.h5", turntable, dir / "turntable");
+  const io::Image frame = io::read_png(dir / "turntable/turntable_002_render.png");
+  EXPECT_EQ(frame.width, 128);
+  EXPECT_FALSE(std::filesystem::exists(dir / "turntable/turntable_003_render.png"));
+  // The bunny is in the middle of every turntable frame, not at its corners.
+  const auto pixel = [&](int r, int c) { return frame.pixels.row(r * 128 + c).head(3).mean(); };
+  EXPECT_LT(pixel(64, 64), 0.95f);
+  EXPECT_GT(pixel(2, 2), 0.9f);
+  RenderRequest poses;
+  poses.poses = kBunny / "transforms_test.json";
+  render_checkpoint(dir / "checkpoint.h5", poses, dir / "views");
+  EXPECT_TRUE(std::filesystem::exists(dir / "views/view_007_error.png"));
 }
 
 // A copy of the bunny's transforms with `edit` applied, in a scratch folder whose images
