@@ -221,7 +221,8 @@ class Nerf final : public Problem {
   std::vector<std::pair<std::string, double>> progress_metrics(
       const OutputContext& context, double steps_per_second) const override {
     std::vector<std::pair<std::string, double>> figures{
-        {"rays/s", steps_per_second * static_cast<double>(rays_per_step_)}};
+        {"rays/s", steps_per_second * static_cast<double>(rays_per_step_)},
+        {"samples/ray", static_cast<double>(samples_per_step_) / std::max<Eigen::Index>(rays_per_step_, 1)}};
     if (test_) {
       // Every 4th pixel of every 4th row of the first test view.
       const View view = render_view(context, *test_, 0, grid_.get(), 4);
@@ -427,6 +428,7 @@ class Nerf final : public Problem {
     points.x << integrators::sample_points(pixels.rays, batch->samples),
         integrators::sample_directions(pixels.rays, batch->samples);
     points.groups = batch->samples.offsets;
+    samples_per_step_ = batch->samples.size();
     points.context = std::move(batch);
     return points;
   }
@@ -566,7 +568,7 @@ class Nerf final : public Problem {
   std::unique_ptr<integrators::OccupancyGrid> grid_;  // null: stratified samples
   FieldValues field_;                                 // the field in training
   mutable long draws_ = 0;                            // batches drawn (grid updates)
-  mutable Eigen::Index rays_per_step_ = 0;
+  mutable Eigen::Index rays_per_step_ = 0, samples_per_step_ = 0;  // of the last batch
 };
 
 }  // namespace
