@@ -241,6 +241,14 @@ Progress Trainer<Scalar>::progress(const StageOptions& stage, double lr) const {
   const long done = global_step_ - stage_started_step_;
   p.steps_per_second = elapsed > 0 ? done / elapsed : 0;
   p.eta_seconds = p.steps_per_second > 0 ? (p.total_steps - p.step) / p.steps_per_second : 0;
+  if (stage.seconds > 0) {
+    // A time budget ends the stage first when it is shorter than its steps would take.
+    const double left = std::max(0.0, stage.seconds - elapsed);
+    const double later = p.steps_per_second > 0
+                             ? (p.total_steps - (p.step - stage_step_ + stage.steps)) / p.steps_per_second
+                             : 0;
+    p.eta_seconds = std::min(p.eta_seconds, left + std::max(0.0, later));
+  }
   return p;
 }
 
@@ -266,7 +274,9 @@ bool Trainer<Scalar>::run_adam(const StageOptions& stage, const Callbacks& callb
       balanced_gradient(gradient.data());
     else
       loss_and_gradient(field_.parameters().data(), gradient.data());
-    const double lr = stage.learning_rate(stage_step_);
+    const double spent = now_seconds() - stage_started_;
+    const double lr = stage.seconds > 0 ? stage.learning_rate_at(std::min(1.0, spent / stage.seconds))
+                                        : stage.learning_rate(stage_step_);
     adam_->step(field_.parameters().data(), gradient.data(), lr);
     step_ms_.push_back(1e3 * (now_seconds() - start));
     ++global_step_;
@@ -276,6 +286,10 @@ bool Trainer<Scalar>::run_adam(const StageOptions& stage, const Callbacks& callb
       ++stage_step_;  // the saved state resumes after this step
       callbacks.checkpoint();
       --stage_step_;
+    }
+    if (stage.seconds > 0 && now_seconds() - stage_started_ >= stage.seconds) {
+      ++stage_step_;  // the stage is over: its budget is spent (the steps count what was run)
+      break;
     }
   }
   return true;

@@ -15,7 +15,10 @@ T in_range_or(const io::ConfigNode& node, std::string_view key, T lowest, T high
 }  // namespace
 
 double StageOptions::learning_rate(int step) const {
-  const double progress = steps > 1 ? static_cast<double>(step) / (steps - 1) : 1.0;
+  return learning_rate_at(steps > 1 ? static_cast<double>(step) / (steps - 1) : 1.0);
+}
+
+double StageOptions::learning_rate_at(double progress) const {
   if (schedule == "cosine")
     return lr_final + 0.5 * (lr - lr_final) * (1 + std::cos(std::numbers::pi * progress));
   if (schedule == "exponential") return lr * std::pow(lr_final / lr, progress);
@@ -61,6 +64,9 @@ TrainingOptions TrainingOptions::from_config(const io::ConfigNode& node) {
         stage.schedule = s.get_choice("schedule", {"constant", "cosine", "exponential"}, "constant");
         stage.lr_final = s.get_or("lr_final", std::min(stage.lr_final, stage.lr));
         s.require("lr_final", stage.lr_final > 0, "expected a learning rate > 0");
+        stage.seconds = s.get_or("seconds", 0.0);
+        s.require("seconds", stage.seconds >= 0 && std::isfinite(stage.seconds),
+                  "expected a number of seconds >= 0 (0: no time limit)");
       } else if (stage.optimizer == "lbfgs") {
         stage.memory = in_range_or(s, "memory", 1, 1000, 20);
         stage.resample_every = in_range_or(s, "resample_every", 0, 1 << 30, 0);
@@ -95,6 +101,7 @@ YAML::Node TrainingOptions::to_yaml() const {
       y["lr"] = s.lr;
       y["schedule"] = s.schedule;
       y["lr_final"] = s.lr_final;
+      if (s.seconds > 0) y["seconds"] = s.seconds;
     } else if (s.optimizer == "lbfgs") {
       y["memory"] = s.memory;
       y["resample_every"] = s.resample_every;

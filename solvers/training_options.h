@@ -20,7 +20,10 @@
 //       - {optimizer: lbfgs, steps: 500, memory: 20, resample_every: 0}
 //       - {optimizer: lm, steps: 200, linear_solver: dense_qr, initial_radius: 1.0e4}
 //
-// Stage keys by optimizer: adam reads lr, schedule, lr_final; lbfgs reads memory; lm
+// Stage keys by optimizer: adam reads lr, schedule, lr_final and seconds (a wall-time budget:
+// the stage ends after `steps` steps or `seconds` seconds, whichever comes first, and its
+// schedule then follows the fraction of the seconds spent; such a stage is not repeatable
+// bit for bit, and a resumed one starts its budget anew); lbfgs reads memory; lm
 // (Levenberg–Marquardt) reads linear_solver (dense_qr | dense_normal_cholesky, default
 // dense_qr) and initial_radius (Ceres' initial trust-region radius, default 1e4, in
 // [1e-12, 1e16]; the first damping is about its inverse); lbfgs and lm read resample_every
@@ -48,9 +51,12 @@ struct StageOptions {
   std::string linear_solver = "dense_qr";  // lm: dense_qr | dense_normal_cholesky
   double initial_radius = 1e4;       // lm: initial trust-region radius
   int resample_every = 0;            // lbfgs, lm: new points every k iterations (0: one set)
+  double seconds = 0;                // adam: > 0 ends the stage after this much wall time
 
   // The Adam learning rate at step `step` (0-based) of this stage.
   double learning_rate(int step) const;
+  // The same at a fraction of the stage done, in [0, 1].
+  double learning_rate_at(double progress) const;
 };
 
 struct TrainingOptions {
