@@ -1,11 +1,11 @@
 # SPDX-License-Identifier: MIT
-# The two commands of the quick start: `make demo` and `make test`. Both install what is
-# missing, configure a Release build in build/ and build it.
+# The two commands of the quick start, `make demo` and `make test`, and the benchmarks. Each
+# installs what is missing, configures a Release build in build/ and builds it.
 BUILD ?= build
 JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?=
 
-.PHONY: all deps configure build demo test bench bench-torch clean
+.PHONY: all deps configure build demo test bench bench-torch bench-nerf clean
 
 all: build
 
@@ -32,6 +32,10 @@ bench: build
 bench-torch: build
 	@NFIELD_WITH_TORCH=1 bash scripts/install_deps.sh
 	@bash bench/compare_torch.sh $(BUILD)
+
+bench-nerf: build
+	@NFIELD_WITH_TORCH=1 bash scripts/install_deps.sh
+	@bash bench/compare_nerf.sh $(BUILD)
 
 clean:
 	@rm -rf $(BUILD)

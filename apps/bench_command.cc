@@ -13,6 +13,8 @@
 #include <vector>
 
 #include "apps/accuracy_bench.h"
+#include "apps/gemm_rate.h"
+#include "apps/nerf_bench.h"
 #include "fields/field.h"
 #include "solvers/adam.h"
 
@@ -32,12 +34,6 @@ struct BenchOptions {
   long block = 128;
   bool json_only = false;
 };
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 // Peak resident memory since the last reset_peak_rss(), in MiB (Linux /proc).
 void reset_peak_rss() { std::ofstream("/proc/self/clear_refs") << "5"; }
@@ -94,62 +90,14 @@ double step_flops(const fields::Field<float>& field, long batch, int streams) {
   return flops;
 }
 
-// The same products at the full batch size with plain Eigen, best of Eigen's own threading
-// and an even split of the rows over the threads. Returns GFLOP/s.
+// The same products at the full batch size with plain Eigen (apps/gemm_rate.h). Returns GFLOP/s.
 double gemm_gflops(const fields::Field<float>& field, long batch, int streams, int repeats) {
-  struct Shape { Eigen::Index in, out; bool input_adjoint; };
-  std::vector<Shape> shapes;
+  std::vector<GemmShape> shapes;
   const auto& modules = field.network().modules();
   for (size_t m = 0; m < modules.size(); ++m)
     if (modules[m]->parameter_count() > 0)
       shapes.push_back({modules[m]->input_width(), modules[m]->output_width(), m != 0});
-  const Eigen::Index rows = batch * streams;
-  std::vector<MatrixF> a, z, w, z_bar, a_bar, w_bar;
-  for (const Shape& s : shapes) {
-    a.push_back(MatrixF::Random(rows, s.in));
-    w.push_back(MatrixF::Random(s.out, s.in));
-    z.push_back(MatrixF(rows, s.out));
-    z_bar.push_back(MatrixF::Random(rows, s.out));
-    a_bar.push_back(MatrixF(rows, s.in));
-    w_bar.push_back(MatrixF(s.out, s.in));
-  }
-  double flops = 0;
-  for (const Shape& s : shapes) flops += (s.input_adjoint ? 3 : 2) * 2.0 * rows * s.in * s.out;
-  const int threads = omp_get_max_threads();
-  auto eigen_threaded = [&] {
-    for (size_t l = 0; l < shapes.size(); ++l) {
-      z[l].noalias() = a[l] * w[l].transpose();
-      w_bar[l].noalias() = z_bar[l].transpose() * a[l];
-      if (shapes[l].input_adjoint) a_bar[l].noalias() = z_bar[l] * w[l];
-    }
-  };
-  std::vector<MatrixF> partial(threads);
-  auto row_split = [&] {
-    for (size_t l = 0; l < shapes.size(); ++l) {
-#pragma omp parallel num_threads(threads)
-      {
-        const int t = omp_get_thread_num();
-        const Eigen::Index first = rows * t / threads, count = rows * (t + 1) / threads - first;
-        z[l].middleRows(first, count).noalias() = a[l].middleRows(first, count) * w[l].transpose();
-        partial[t].noalias() = z_bar[l].middleRows(first, count).transpose() * a[l].middleRows(first, count);
-        if (shapes[l].input_adjoint)
-          a_bar[l].middleRows(first, count).noalias() = z_bar[l].middleRows(first, count) * w[l];
-      }
-      w_bar[l] = partial[0];
-      for (int t = 1; t < threads; ++t) w_bar[l] += partial[t];
-    }
-  };
-  auto time = [&](auto&& run) {
-    run();
-    std::vector<double> seconds;
-    for (int r = 0; r < repeats; ++r) {
-      const auto start = Clock::now();
-      run();
-      seconds.push_back(std::chrono::duration<double>(Clock::now() - start).count());
-    }
-    return flops / median(seconds) * 1e-9;
-  };
-  return std::max(time(eigen_threaded), time(row_split));
+  return apps::gemm_gflops(shapes, batch * streams, repeats);
 }
 
 struct StepResult {
@@ -248,10 +196,10 @@ void add_bench_command(CLI::App& app) {
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   bench->add_option("--hidden", options->hidden, "Hidden widths")->check(CLI::PositiveNumber)->capture_default_str();
-  bench->add_option("--steps", options->steps, "Timed steps per configuration")
+  bench->add_option("--steps", options->steps, "Timed steps per configuration (--nerf: 20 unless given)")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
-  bench->add_option("--warmup", options->warmup, "Untimed steps first")->check(CLI::Range(0, 1000))->capture_default_str();
+  bench->add_option("--warmup", options->warmup, "Untimed steps first (--nerf: 3 unless given)")->check(CLI::Range(0, 1000))->capture_default_str();
   bench->add_option("--threads", options->threads, "Threads (0: all)")->check(CLI::Range(0, 1024))->capture_default_str();
   bench->add_option("--block", options->block, "Points per block of the chunked pass")
       ->check(CLI::Range(1L, 1L << 20))
@@ -269,8 +217,38 @@ void add_bench_command(CLI::App& app) {
       ->capture_default_str();
   bench->add_option("--out", accuracy->out, "--accuracy: output folder, one subfolder per case")
       ->capture_default_str();
-  bench->add_option("--set", accuracy->overrides, "--accuracy: override a value in every case's config");
-  bench->callback([options, accuracy, accuracy_flag] {
+  bench->add_option("--set", accuracy->overrides,
+                    "--accuracy, --nerf: override a value in every case's config, or in the --nerf config");
+
+  auto nerf = std::make_shared<NerfBenchOptions>();
+  auto nerf_flag = std::make_shared<bool>(false);
+  bench->add_flag("--nerf", *nerf_flag,
+                  "Time radiance-field training (rays/s: ray sampling, network passes, volume rendering "
+                  "and its adjoint, Adam) and the render of a test view instead")
+      ->excludes("--accuracy");
+  bench->add_option("--config", nerf->config, "--nerf: the radiance-field config")
+      ->check(CLI::ExistingFile)
+      ->capture_default_str();
+  bench->add_option("--rays", nerf->rays, "--nerf: rays per step (0: the config's training.batch.rays)")
+      ->check(CLI::Range(0L, 1L << 24))
+      ->capture_default_str();
+  bench->add_option("--render-stride", nerf->render_stride,
+                    "--nerf: render every k-th pixel of every k-th row of the test view")
+      ->check(CLI::Range(1, 4096))
+      ->capture_default_str();
+  bench->add_option("--render-repeats", nerf->render_repeats, "--nerf: timed renders of the test view")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  bench->callback([bench, options, accuracy, accuracy_flag, nerf, nerf_flag] {
+    if (*nerf_flag) {
+      // Steps of a radiance field are long and vary with the rays drawn: more of them by default.
+      if (bench->count("--steps") > 0) nerf->steps = options->steps;
+      if (bench->count("--warmup") > 0) nerf->warmup = options->warmup;
+      nerf->threads = options->threads;
+      nerf->json_only = options->json_only;
+      nerf->overrides = accuracy->overrides;
+      return run_nerf_bench(*nerf);
+    }
     if (!*accuracy_flag) return run_bench(*options);
     const int code = run_accuracy_bench(*accuracy);
     if (code != 0) throw CLI::RuntimeError(code);

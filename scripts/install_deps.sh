@@ -13,7 +13,7 @@ packages=(
   libboost-dev
 )
 if [[ "${NFIELD_WITH_TORCH:-0}" == 1 ]]; then
-  packages+=(python3 python3-torch python3-numpy libopenblas0-openmp)
+  packages+=(python3 python3-torch python3-numpy python3-pil libopenblas0-openmp)
 fi
 
 missing=()

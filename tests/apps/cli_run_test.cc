@@ -389,6 +389,40 @@ TEST(AccuracyBenchTest, ReportsTheErrorAfterEachStage) {
   EXPECT_NE(o.err.find("unknown case 'poison_2d' (valid: poisson_2d,"), std::string::npos) << o.err;
 }
 
+// nfield bench --nerf in a tiny setting on the shipped bunny config: the JSON line carries
+// every figure bench/compare_nerf.sh reads, each positive (no timing is asserted). A config
+// without a radiance field is refused with exit code 2.
+TEST(NerfBenchTest, PrintsTheFiguresTheComparisonReads) {
+  const auto dir = scratch_dir();
+  const std::string config = NFIELD_SOURCE_DIR "/configs/nerf_bunny.yaml";
+  Outcome o = run_nfield({"bench", "--nerf", "--config", config, "--steps", "2", "--warmup", "1", "--rays", "8",
+                          "--threads", "1", "--render-stride", "16", "--render-repeats", "1", "--json"},
+                         dir, dir / "capture");
+  ASSERT_EQ(o.code, 0) << describe(o);
+  const std::string last = o.out.substr(o.out.rfind("{\"impl\""));
+  const nlohmann::json row = nlohmann::json::parse(last);
+  EXPECT_EQ(row["impl"], "nfield");
+  EXPECT_EQ(row["bench"], "nerf");
+  EXPECT_EQ(row["rays_per_step"].get<int>(), 8);
+  EXPECT_EQ(row["threads"].get<int>(), 1);
+  EXPECT_EQ(row["frame_pixels"].get<int>(), 64);  // every 16th pixel of every 16th row of 128²
+  for (const char* key : {"rays_per_s", "median_step_ms", "samples_per_step", "network_ms", "rendering_ms",
+                          "share_network", "share_rendering", "mlp_gflops", "step_gflops", "gemm_gflops",
+                          "mlp_gemm_ratio", "frame_ms", "frame_samples", "params"}) {
+    ASSERT_TRUE(row.contains(key)) << key << " missing from " << last;
+    EXPECT_GT(row[key].get<double>(), 0) << key << " in " << last;
+  }
+  EXPECT_LE(row["share_network"].get<double>() + row["share_rendering"].get<double>(), 1.0 + 1e-3);
+
+  write_text(dir / "poisson.yaml",
+             poisson_config("{lower: [0, 0], upper: [1, 1]}",
+                            "  batch: {interior: 16, boundary: 8}\n  stages: [{optimizer: adam, steps: 1}]\n",
+                            "{grid: [5, 5], png: false}"));
+  o = run_nfield({"bench", "--nerf", "--config", (dir / "poisson.yaml").string()}, dir, dir / "capture");
+  EXPECT_EQ(o.code, 2) << describe(o);
+  EXPECT_NE(o.err.find("needs a radiance field"), std::string::npos) << o.err;
+}
+
 INSTANTIATE_TEST_SUITE_P(Precisions, OutputsTest, ::testing::Values("double", "float"));
 
 }  // namespace
