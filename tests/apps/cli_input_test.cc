@@ -102,7 +102,7 @@ std::vector<BadConfig> bad_configs() {
       {"UnknownTopLevelKey", base + "solver: fast\n", "|solver", "",
        {"unknown key 'solver' (valid keys: ", "problem", "domain", "training", "output"}},
       {"UnknownStageKey", edit("lr: 1.0e-3}", "lrr: 1.0e-3}"), "|lrr", "training.stages[0]",
-       {"unknown key 'lrr' (valid keys: optimizer, steps, lr, schedule, lr_final)"}},
+       {"unknown key 'lrr' (valid keys: optimizer, steps, lr, schedule, lr_final, seconds)"}},
       {"UnknownFieldKey", edit("  hidden: [8, 8]", "  hiden: [8, 8]"), "|hiden", "field",
        {"unknown key 'hiden'", "hidden"}},
       {"UnknownConditionKey", edit("value: \"0\"}", "value: \"0\", wieght: 2}"), "|wieght",

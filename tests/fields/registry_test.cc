@@ -182,8 +182,11 @@ TEST(FieldOptions, ValidationNamesTheField) {
     EXPECT_NE(message.find(field), std::string::npos) << "'" << message << "' lacks " << field;
   };
   FieldOptions o;
-  o.input_dim = 5;
+  o.input_dim = 0;
   expect_field(o, "field.input_dim");
+  o = {};
+  o.type = "nerf";  // [x, d] → 4 outputs
+  expect_field(o, "field.input_dim = 2: must be 6 for nerf");
   o = {};
   o.output_dim = 0;
   expect_field(o, "field.output_dim");
@@ -219,6 +222,21 @@ TEST(Registry, RejectsDuplicatesAndMatchesCaseInsensitively) {
   } catch (const UnknownNameError& e) {
     EXPECT_EQ(std::string(e.what()), "unknown widget 'gamma' (valid: alpha, beta)");
   }
+}
+
+}  // namespace
+}  // namespace nfield::fields
+
+namespace nfield::fields {
+namespace {
+
+// Fields take any number of inputs (a 5-D input: space, time and a parameter).
+TEST(FieldOptions, AnyNumberOfInputs) {
+  FieldOptions o;
+  o.input_dim = 5;
+  o.hidden = {8};
+  const Field<double> field(o);
+  EXPECT_EQ(field.values(Eigen::MatrixXd::Random(3, 5)).rows(), 3);
 }
 
 }  // namespace
