@@ -8,6 +8,9 @@
 //   mlp    x → γ(x) → [Dense → σ] × H → Dense, σ = `activation`; He-uniform weights for relu,
 //          Xavier-uniform otherwise, zero biases.
 //
+// Encodings with parameters (hash_grid) draw their own initialization (Module::initialize),
+// from the same engine, before the dense layers.
+//
 // `hidden` lists the H hidden widths: the SIREN reference network of the paper, d → 256,
 // three 256 → 256 layers and 256 → 1, is hidden = [256, 256, 256, 256].
 // Complex-valued fields use output_dim = 2 (real, imaginary).
