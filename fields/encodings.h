@@ -52,7 +52,7 @@ namespace nfield::fields {
 struct EncodingOptions {
   std::string type = "identity";  // a registered name (encoding_names())
   int frequencies = 6;            // positional: L, frequencies 2⁰π … 2^(L−1)π per axis
-  bool include_input = true;      // positional: keep x itself in γ(x)
+  bool include_input = true;      // positional, hash_grid: keep x itself in γ(x)
   int features = 128;             // fourier: m
   double scale = 10.0;            // fourier: σ
   std::uint64_t seed = 0;         // fourier: draws B

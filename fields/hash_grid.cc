@@ -6,7 +6,6 @@
 #include <stdexcept>
 #include <string>
 
-#include "fields/encoding_type.h"
 #include "io/registry.h"
 
 namespace nfield::fields {
@@ -20,10 +19,6 @@ namespace {
 constexpr int kMaxDim = 4;
 constexpr int kMaxCorners = 1 << kMaxDim;
 constexpr std::uint32_t kPrimes[kMaxDim] = {1u, 2654435761u, 805459861u, 3674653429u};
-constexpr int kMaxLevels = 32;
-constexpr int kMaxFeatures = 16;
-constexpr int kMinLog2Table = 10, kMaxLog2Table = 24;
-constexpr int kMaxResolution = 1 << 20;
 
 bool is_smoothstep(const EncodingOptions& o) {
   return Registry<int>::lower(o.interpolation) == "smoothstep";
@@ -65,7 +60,7 @@ std::vector<HashGridLevel> hash_grid_levels(const EncodingOptions& o, int input_
     const double n = std::floor(o.base_resolution * std::pow(growth, l) * (1 + 1e-9));
     HashGridLevel& level = levels[l];
     level.resolution = static_cast<int>(std::clamp(n, 1.0, static_cast<double>(o.finest_resolution)));
-    const double vertices = std::pow(level.resolution + 1.0, input_dim);
+    const double vertices = std::pow(level.resolution + 2.0, input_dim);
     level.dense = vertices <= table;
     level.rows = static_cast<Eigen::Index>(level.dense ? vertices : table);
     level.first_row = first;
@@ -129,6 +124,7 @@ HashGridEncoding<Scalar>::HashGridEncoding(const EncodingOptions& options, int i
     : dim_(input_dim),
       features_(options.features_per_level),
       smoothstep_(is_smoothstep(options)),
+      include_input_(options.include_input),
       init_scale_(options.init_scale) {
   if (input_dim < 1 || input_dim > kMaxDim)
     throw std::invalid_argument("hash_grid encoding: input_dim = " + std::to_string(input_dim) +
@@ -148,7 +144,7 @@ HashGridEncoding<Scalar>::HashGridEncoding(const EncodingOptions& options, int i
     for (int j = 0; j < dim_; ++j) {
       level.scale[j] = static_cast<Scalar>(info.resolution / range[j]);
       level.stride[j] = info.dense ? static_cast<std::uint32_t>(stride) : 0u;
-      stride *= static_cast<std::uint64_t>(info.resolution) + 1;
+      stride *= static_cast<std::uint64_t>(info.resolution) + 2;
     }
     level.mask = static_cast<std::uint32_t>((std::uint64_t{1} << options.log2_table_size) - 1);
     grid_.push_back(level);
@@ -181,11 +177,11 @@ bool HashGridEncoding<Scalar>::initialize(Scalar* params, std::mt19937_64& rng) 
 
 template <typename Scalar>
 void HashGridEncoding<Scalar>::locate(const Level& level, const Scalar* x, Cell& cell) const {
-  const Scalar last = static_cast<Scalar>(level.info.resolution - 1);
+  const Scalar last = static_cast<Scalar>(level.info.resolution);
   std::uint32_t term[kMaxDim][2];
   for (int j = 0; j < dim_; ++j) {
     const Scalar s = level.scale[j];
-    const Scalar p = (x[j] - lower_[j]) * s;
+    const Scalar p = (x[j] - lower_[j]) * s + Scalar(0.5);
     Scalar c = std::floor(p);
     if (!(c >= 0)) c = 0;  // NaN too
     if (c > last) c = last;
@@ -394,7 +390,9 @@ void HashGridEncoding<Scalar>::forward(const StreamLayout& layout, const Scalar*
   gather(layout, o, in, inputs);
   kappa.resize(static_cast<size_t>(streams * corners));
   acc.resize(static_cast<size_t>(streams * f_count));
-  out.resize(n_points, in.count, level_count * f_count);
+  const Eigen::Index first_column = input_columns();
+  out.resize(n_points, in.count, first_column + level_count * f_count);
+  if (first_column > 0) out.data.leftCols(first_column) = in.data;
   Scalar *rows_out = nullptr, *kappa_out = nullptr;
   if (saved) {
     // Rows are below 2^24, so even a float holds them exactly.
@@ -423,7 +421,7 @@ void HashGridEncoding<Scalar>::forward(const StreamLayout& layout, const Scalar*
       }
       for (int s = 0; s < streams; ++s)
         for (int f = 0; f < f_count; ++f)
-          out.data(s * n_points + n, l * f_count + f) = acc[s * f_count + f];
+          out.data(s * n_points + n, first_column + l * f_count + f) = acc[s * f_count + f];
       if (saved) {
         const Eigen::Index column = l * n_points + n;
         for (int v = 0; v < corners; ++v)
@@ -454,7 +452,7 @@ void HashGridEncoding<Scalar>::table_adjoint(const Offsets& o, const Streams<Sca
       bool any = false;
       for (int s = 0; s < streams; ++s)
         for (int f = 0; f < f_count; ++f) {
-          const Scalar y = out_adjoint.data(s * n_points + n, l * f_count + f);
+          const Scalar y = out_adjoint.data(s * n_points + n, input_columns() + l * f_count + f);
           y_bar[s * f_count + f] = y;
           any = any || y != 0;
         }
@@ -533,7 +531,8 @@ void HashGridEncoding<Scalar>::input_adjoint(const StreamLayout& layout, const S
         for (int s = 0; s < streams; ++s) {
           Scalar sum = 0;
           for (int f = 0; f < f_count; ++f)
-            sum += out_adjoint.data(s * n_points + n, static_cast<Eigen::Index>(l) * f_count + f) *
+            sum += out_adjoint.data(s * n_points + n,
+                                    input_columns() + static_cast<Eigen::Index>(l) * f_count + f) *
                    entry[f];
           omega[s * corners + v] = sum;
         }
@@ -614,6 +613,7 @@ void HashGridEncoding<Scalar>::input_adjoint(const StreamLayout& layout, const S
         for (int j = 0; j < d; ++j)
           a(layout.taylor(dir, k) * n_points + n, j) = bar[o.taylor_at(dir, k) + j];
   }
+  if (include_input_) a += out_adjoint.data.leftCols(d);
 }
 
 // Reverse of taylor_weights: W̄_v = (0, ω_{(p,1),v}, …, ω_{(p,K),v}) → φ̄_j = Σ_v ± W̄_v ⋆
@@ -692,101 +692,5 @@ void HashGridEncoding<Scalar>::taylor_adjoint(const StreamLayout& layout, const 
 
 template class HashGridEncoding<float>;
 template class HashGridEncoding<double>;
-
-// ---------------------------------------------------------------------------------------
-// Registry entry.
-
-namespace {
-
-[[noreturn]] void reject(const std::string& option, const std::string& value,
-                         const std::string& rule) {
-  throw std::invalid_argument("encoding." + option + " = " + value + ": " + rule);
-}
-
-void check_range(const std::string& option, int value, int lowest, int highest) {
-  if (value < lowest || value > highest)
-    reject(option, std::to_string(value),
-           "must be in [" + std::to_string(lowest) + ", " + std::to_string(highest) + "]");
-}
-
-const std::vector<std::string>& interpolations() {
-  static const std::vector<std::string> names{"linear", "smoothstep"};
-  return names;
-}
-
-class HashGridType final : public EncodingTypeOf<HashGridType> {
- public:
-  void validate(const EncodingOptions& o) const override {
-    check_range("levels", o.levels, 1, kMaxLevels);
-    check_range("features_per_level", o.features_per_level, 1, kMaxFeatures);
-    check_range("log2_table_size", o.log2_table_size, kMinLog2Table, kMaxLog2Table);
-    check_range("base_resolution", o.base_resolution, 1, kMaxResolution);
-    check_range("finest_resolution", o.finest_resolution, o.base_resolution, kMaxResolution);
-    if (!(o.init_scale > 0) || !std::isfinite(o.init_scale))
-      reject("init_scale", std::to_string(o.init_scale), "must be a finite number > 0");
-    const std::string kind = Registry<int>::lower(o.interpolation);
-    if (std::find(interpolations().begin(), interpolations().end(), kind) == interpolations().end())
-      reject("interpolation", "'" + o.interpolation + "'", "must be linear or smoothstep");
-  }
-  void validate_inputs(const EncodingOptions&, int input_dim) const override {
-    if (input_dim < 1 || input_dim > kMaxDim)
-      reject("type", "hash_grid", "takes 1 to 4 inputs, not " + std::to_string(input_dim));
-  }
-  template <typename Scalar>
-  static std::unique_ptr<autodiff::Module<Scalar>> make(const EncodingOptions& o, int input_dim) {
-    return std::make_unique<HashGridEncoding<Scalar>>(o, input_dim);
-  }
-  void read(const io::ConfigNode& e, const EncodingContext&, EncodingOptions& o) const override {
-    if (e.has("levels")) o.levels = e.get_in_range("levels", 1, kMaxLevels);
-    if (e.has("features_per_level"))
-      o.features_per_level = e.get_in_range("features_per_level", 1, kMaxFeatures);
-    if (e.has("log2_table_size"))
-      o.log2_table_size = e.get_in_range("log2_table_size", kMinLog2Table, kMaxLog2Table);
-    if (e.has("base_resolution"))
-      o.base_resolution = e.get_in_range("base_resolution", 1, kMaxResolution);
-    if (e.has("finest_resolution"))
-      o.finest_resolution = e.get_in_range("finest_resolution", 1, kMaxResolution);
-    e.require("finest_resolution", o.finest_resolution >= o.base_resolution,
-              "expected a number >= base_resolution = " + std::to_string(o.base_resolution));
-    o.interpolation = e.get_choice("interpolation", interpolations(), "linear");
-    o.init_scale = e.get_or("init_scale", o.init_scale);
-    e.require("init_scale", o.init_scale > 0 && std::isfinite(o.init_scale),
-              "expected a finite number > 0");
-  }
-  void write(const EncodingOptions& o, const EncodingContext&, YAML::Node& n) const override {
-    n["levels"] = o.levels;
-    n["features_per_level"] = o.features_per_level;
-    n["log2_table_size"] = o.log2_table_size;
-    n["base_resolution"] = o.base_resolution;
-    n["finest_resolution"] = o.finest_resolution;
-    n["interpolation"] = Registry<int>::lower(o.interpolation);
-    n["init_scale"] = io::yaml_number(o.init_scale);
-  }
-  void save(io::H5Writer& file, const std::string& group, const EncodingOptions& o) const override {
-    file.write_attribute(group, "encoding_levels", o.levels);
-    file.write_attribute(group, "encoding_features_per_level", o.features_per_level);
-    file.write_attribute(group, "encoding_log2_table_size", o.log2_table_size);
-    file.write_attribute(group, "encoding_base_resolution", o.base_resolution);
-    file.write_attribute(group, "encoding_finest_resolution", o.finest_resolution);
-    file.write_attribute(group, "encoding_interpolation", Registry<int>::lower(o.interpolation));
-    file.write_attribute(group, "encoding_init_scale", o.init_scale);
-  }
-  void load(const io::H5Reader& file, const std::string& group, EncodingOptions& o) const override {
-    auto integer = [&](const char* name) {
-      return static_cast<int>(file.read_attribute<std::int64_t>(group, name));
-    };
-    o.levels = integer("encoding_levels");
-    o.features_per_level = integer("encoding_features_per_level");
-    o.log2_table_size = integer("encoding_log2_table_size");
-    o.base_resolution = integer("encoding_base_resolution");
-    o.finest_resolution = integer("encoding_finest_resolution");
-    o.interpolation = file.read_attribute<std::string>(group, "encoding_interpolation");
-    o.init_scale = file.read_attribute<double>(group, "encoding_init_scale");
-  }
-};
-
-}  // namespace
-
-std::unique_ptr<const EncodingType> make_hash_grid_type() { return std::make_unique<HashGridType>(); }
 
 }  // namespace nfield::fields

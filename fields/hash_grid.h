@@ -3,15 +3,29 @@
 // Multiresolution hash-grid encoding (Müller, Evans, Schied and Keller, Instant Neural
 // Graphics Primitives, 2022) with every derivative stream.
 //
-// Level l = 0 … L−1 has N_l = ⌊N_min bˡ⌋ cells per axis over the box [lower, upper] (the
-// field's domain), b = exp((ln N_max − ln N_min)/(L − 1)). At x, per axis j:
-//   p_j = N_l (x_j − lower_j)/(upper_j − lower_j),  c_j = clamp(⌊p_j⌋, 0, N_l − 1),
+// Level l = 0 … L−1 has cells of width 1/N_l of the box [lower, upper] (the field's
+// domain), N_l = ⌊N_min bˡ⌋, b = exp((ln N_max − ln N_min)/(L − 1)), offset by half a cell
+// as in Instant NGP. At x, per axis j:
+//   p_j = N_l (x_j − lower_j)/(upper_j − lower_j) + 1/2,  c_j = clamp(⌊p_j⌋, 0, N_l),
 //   t_j = p_j − c_j,  φ_j = t_j (linear) or s(t_j) = t_j²(3 − 2t_j) (smoothstep),
 // and the level's F features interpolate the table rows of the cell's 2^d corners v:
 //   y_l(x) = Σ_v W_v(x) T_l[row(v)],  W_v = Π_j (φ_j if v_j = c_j + 1, else 1 − φ_j).
-// row(v) = Σ_j v_j (N_l + 1)^j (dense) while (N_l + 1)^d ≤ T = 2^log2_table_size, else the
-// spatial hash (⊕_j v_j π_j) mod T, π = (1, 2654435761, 805459861, 3674653429), in 32-bit
-// arithmetic. γ(x) = [y_0, …, y_{L−1}]: L·F outputs, level-major.
+// The box touches N_l + 1 cells and N_l + 2 vertices per axis. row(v) = Σ_j v_j (N_l + 2)^j
+// (dense) while (N_l + 2)^d ≤ T = 2^log2_table_size, else the spatial hash
+// (⊕_j v_j π_j) mod T, π = (1, 2654435761, 805459861, 3674653429), in 32-bit arithmetic.
+// γ(x) = [x if include_input, y_0, …, y_{L−1}]: L·F features, level-major.
+//
+// Why x may be kept: inside a cell a smoothstep feature's second derivative along an axis
+// has zero mean (its slope vanishes on both faces), so mean curvature, such as a Poisson
+// solution with a source of one sign needs everywhere, can only come from the network's own
+// nonlinearity acting on the features; with x beside them the network forms it as an MLP of
+// x does and the grid adds detail (configs/poisson_2d_hash_grid.yaml).
+//
+// Why the half-cell offset: smoothstep has zero slope on cell faces, so a level with faces
+// on the box boundary has ∂y_l/∂n = 0 there, and with every level so aligned the field is
+// forced to ∂u/∂n = 0 on the whole boundary. A Dirichlet problem whose solution has a normal
+// derivative there (configs/poisson_2d.yaml) then cannot be fitted (rel_l2 0.6 after Adam).
+// Offset, the boundary lies mid-cell on every level.
 //
 // Streams. Every output stream of a level is Σ_v κ_v T_l[row(v)], one scalar κ per corner
 // and stream; W_v is a product of one factor per axis, so its derivatives in x are products
@@ -29,10 +43,11 @@
 // continuous; with `linear` its gradient jumps and ∂²/∂x_j² vanishes inside cells (only mixed
 // second derivatives remain), so second-order residuals see little of it; with `smoothstep`
 // the gradient is continuous (s' = 0 at 0 and 1) and all second derivatives are present,
-// jumping across faces. Outside the box `linear` extends the boundary cells linearly and
-// `smoothstep` holds t_j in [0, 1] (a constant extension, still C¹); nothing wraps around.
+// jumping across faces. More than half a cell outside the box, `linear` extends the outer
+// cells linearly and `smoothstep` holds t_j in [0, 1] (a constant extension, still C¹);
+// nothing wraps around.
 //
-// Parameters: level after level, a table of R_l = min(T, (N_l + 1)^d) rows × F, row-major
+// Parameters: level after level, a table of R_l = min(T, (N_l + 2)^d) rows × F, row-major
 // (feature fastest): coarse dense levels hold exactly their vertices. Initialized
 // U(−init_scale, init_scale), 10⁻⁴ by default as in Instant NGP. Inputs of dimension 1 to 4.
 #pragma once
@@ -50,7 +65,7 @@ namespace nfield::fields {
 class EncodingType;
 
 struct HashGridLevel {
-  int resolution = 0;          // N_l: cells per axis
+  int resolution = 0;          // N_l: cells per box width
   bool dense = false;          // one row per vertex; else the spatial hash
   Eigen::Index first_row = 0;  // of this level's table, counting rows of all levels before
   Eigen::Index rows = 0;       // R_l
@@ -68,7 +83,7 @@ class HashGridEncoding final : public autodiff::Module<Scalar> {
   std::string name() const override { return "hash_grid encoding"; }
   Eigen::Index input_width() const override { return dim_; }
   Eigen::Index output_width() const override {
-    return static_cast<Eigen::Index>(levels_.size()) * features_;
+    return input_columns() + static_cast<Eigen::Index>(levels_.size()) * features_;
   }
   Eigen::Index parameter_count() const override { return rows_ * features_; }
   bool initialize(Scalar* params, std::mt19937_64& rng) const override;
@@ -98,10 +113,11 @@ class HashGridEncoding final : public autodiff::Module<Scalar> {
   struct Level {
     HashGridLevel info;
     Scalar scale[4];          // ∂t_j/∂x_j = N_l / (upper_j − lower_j)
-    std::uint32_t stride[4];  // dense: (N_l + 1)^j
+    std::uint32_t stride[4];  // dense: (N_l + 2)^j
     std::uint32_t mask;       // hashed: T − 1
   };
 
+  Eigen::Index input_columns() const { return include_input_ ? dim_ : 0; }
   void locate(const Level& level, const Scalar* x, Cell& cell) const;
   void gather(const autodiff::StreamLayout& layout, const Offsets& o,
               const autodiff::Streams<Scalar>& in, std::vector<Scalar>& inputs) const;
@@ -124,6 +140,7 @@ class HashGridEncoding final : public autodiff::Module<Scalar> {
   int dim_;
   int features_;
   bool smoothstep_;
+  bool include_input_;
   double init_scale_;
   Scalar lower_[4];
   std::vector<HashGridLevel> levels_;

@@ -8,7 +8,8 @@
 // Layout read (fields/field.h, fields/dense.h, fields/encodings.h):
 //   encoding   [x if positional and include_input, sin(x Bᵀ), cos(x Bᵀ)], B = encoding_matrix()
 //              cusp: [x, |x_a − c_k| for the planes c_k of options.encoding.at]
-//              hash_grid: per level, the interpolation of the cell's corner rows, written here
+//              hash_grid: [x if include_input, per level the interpolation of the cell's
+//              corner rows], written here
 //              from the definition in fields/hash_grid.h (only the level sizes come from
 //              fields::hash_grid_levels); its tables come first in the parameters
 //   hidden l   z = W a + b (W out × in column-major, then b), y = σ_l(z)
@@ -200,16 +201,17 @@ class ReferenceField {
     siren_ = Registry<int>::lower(options_.type) == "siren";
     cusp_ = Registry<int>::lower(options_.encoding.type) == "cusp";
     hash_ = Registry<int>::lower(options_.encoding.type) == "hash_grid";
-    include_input_ = !hash_ && (encoding_.rows() == 0 || cusp_ ||
-                                (Registry<int>::lower(options_.encoding.type) == "positional" &&
-                                 options_.encoding.include_input));
+    include_input_ = hash_ ? options_.encoding.include_input
+                           : encoding_.rows() == 0 || cusp_ ||
+                                 (Registry<int>::lower(options_.encoding.type) == "positional" &&
+                                  options_.encoding.include_input);
     Eigen::Index width = (include_input_ ? options_.input_dim : 0) +
                          (cusp_ ? 1 : 2) * encoding_.rows();
     Eigen::Index count = 0;
     if (hash_) {
       levels_ = fields::hash_grid_levels(options_.encoding, options_.input_dim);
       const Eigen::Index f = options_.encoding.features_per_level;
-      width = static_cast<Eigen::Index>(levels_.size()) * f;
+      width = (include_input_ ? options_.input_dim : 0) + static_cast<Eigen::Index>(levels_.size()) * f;
       count = (levels_.back().first_row + levels_.back().rows) * f;
       table_count_ = count;
     }
@@ -276,7 +278,8 @@ class ReferenceField {
         a.push_back(value_of(z) < 0 ? -z : z);
       }
     } else if (hash_) {
-      a = hash_grid(x, pre);
+      const std::vector<T> features = hash_grid(x, pre);
+      a.insert(a.end(), features.begin(), features.end());
     } else if (encoding_.rows() > 0) {
       std::vector<T> z(encoding_.rows(), constant<T>(0.0));
       for (Eigen::Index r = 0; r < encoding_.rows(); ++r)
@@ -326,9 +329,9 @@ class ReferenceField {
       for (int j = 0; j < d; ++j) {
         const double lo = e.lower.empty() ? 0.0 : e.lower[j];
         const double hi = e.upper.empty() ? 1.0 : e.upper[j];
-        const T p = (x[j] - constant<T>(lo)) * constant<T>(n / (hi - lo));
+        const T p = (x[j] - constant<T>(lo)) * constant<T>(n / (hi - lo)) + constant<T>(0.5);
         if (pre) pre->push_back(std::sin(std::numbers::pi * value_of(p)));
-        const double c = std::clamp(std::floor(value_of(p)), 0.0, n - 1.0);
+        const double c = std::clamp(std::floor(value_of(p)), 0.0, static_cast<double>(n));
         cell[j] = static_cast<std::int64_t>(c);
         const T t = p - constant<T>(c);
         if (!smooth)
@@ -348,7 +351,7 @@ class ReferenceField {
           w = w * (bit ? phi[j] : constant<T>(1.0) - phi[j]);
           const std::int64_t vertex = cell[j] + bit;
           dense_row += static_cast<std::uint64_t>(vertex) * stride;
-          stride *= static_cast<std::uint64_t>(n) + 1;
+          stride *= static_cast<std::uint64_t>(n) + 2;
           hash ^= static_cast<std::uint32_t>(vertex) * kPrimes[j];
         }
         const std::uint64_t row =
