@@ -387,7 +387,6 @@ void HashGridEncoding<Scalar>::forward(const StreamLayout& layout, const Scalar*
   const int corners = o.corners, streams = o.streams, f_count = features_;
   const auto level_count = static_cast<Eigen::Index>(grid_.size());
   thread_local std::vector<Scalar> inputs, kappa, acc;
-  gather(layout, o, in, inputs);
   kappa.resize(static_cast<size_t>(streams * corners));
   acc.resize(static_cast<size_t>(streams * f_count));
   const Eigen::Index first_column = input_columns();
@@ -402,6 +401,15 @@ void HashGridEncoding<Scalar>::forward(const StreamLayout& layout, const Scalar*
     rows_out = (*saved)[0].data();
     kappa_out = (*saved)[1].data();
   }
+  if (streams == 1) {
+    switch (dim_) {
+      case 1: return forward_values<1>(params, in, out, rows_out, kappa_out);
+      case 2: return forward_values<2>(params, in, out, rows_out, kappa_out);
+      case 3: return forward_values<3>(params, in, out, rows_out, kappa_out);
+      default: return forward_values<4>(params, in, out, rows_out, kappa_out);
+    }
+  }
+  gather(layout, o, in, inputs);
   Cell cell;
   // Level by level: one table at a time stays in cache.
   for (Eigen::Index l = 0; l < level_count; ++l) {
@@ -432,6 +440,82 @@ void HashGridEncoding<Scalar>::forward(const StreamLayout& layout, const Scalar*
   }
 }
 
+// The value stream alone (radiance fields, fits of values), the common case: the same
+// weights and rows as locate and corner_weights (bit for bit: the same products in the same
+// order), the 2^D weights by doubling over the axes, with loops of fixed length. Per level,
+// a first pass finds every point's rows and weights, and the second gathers the table rows,
+// prefetching a few points ahead: hashed rows are scattered over megabytes, and the loads of
+// several points then overlap instead of waiting one after the other.
+template <typename Scalar>
+template <int D>
+void HashGridEncoding<Scalar>::forward_values(const Scalar* params, const Streams<Scalar>& in,
+                                              Streams<Scalar>& out, Scalar* rows_out,
+                                              Scalar* kappa_out) const {
+  constexpr int corners = 1 << D;
+  constexpr Eigen::Index ahead = 8;  // points
+  const Eigen::Index n_points = in.points, in_rows = in.data.rows(), out_rows = out.data.rows();
+  const int f_count = features_;
+  const Scalar* x = in.data.data();
+  thread_local std::vector<std::uint32_t> rows;
+  thread_local std::vector<Scalar> weights;
+  rows.resize(static_cast<size_t>(n_points * corners));
+  weights.resize(static_cast<size_t>(n_points * corners));
+  for (size_t l = 0; l < grid_.size(); ++l) {
+    const Level& level = grid_[l];
+    const bool dense = level.info.dense;
+    const Scalar last = static_cast<Scalar>(level.info.resolution);
+    for (Eigen::Index n = 0; n < n_points; ++n) {
+      Scalar* w = weights.data() + n * corners;
+      std::uint32_t* r = rows.data() + n * corners;
+      w[0] = 1;
+      r[0] = 0;
+      for (int j = 0; j < D; ++j) {
+        const Scalar p = (x[j * in_rows + n] - lower_[j]) * level.scale[j] + Scalar(0.5);
+        Scalar c = std::floor(p);
+        if (!(c >= 0)) c = 0;
+        if (c > last) c = last;
+        const Scalar t = p - c;
+        const Scalar phi = !smoothstep_              ? t
+                           : (t >= 0 && t <= 1)      ? t * t * (3 - 2 * t)
+                           : t < 0                   ? Scalar(0)
+                                                     : Scalar(1);
+        const auto v = static_cast<std::uint32_t>(static_cast<int>(c));
+        const std::uint32_t weight = dense ? level.stride[j] : kPrimes[j];
+        const std::uint32_t a0 = v * weight, a1 = (v + 1) * weight;
+        for (int k = 0; k < (1 << j); ++k) {
+          w[k + (1 << j)] = w[k] * phi;
+          w[k] *= 1 - phi;
+          r[k + (1 << j)] = dense ? r[k] + a1 : r[k] ^ a1;
+          r[k] = dense ? r[k] + a0 : r[k] ^ a0;
+        }
+      }
+      if (!dense)
+        for (int v = 0; v < corners; ++v) r[v] &= level.mask;
+    }
+    const Scalar* table = params + level.info.first_row * f_count;
+    Scalar* y = out.data.data() + (input_columns() + static_cast<Eigen::Index>(l) * f_count) * out_rows;
+    for (Eigen::Index n = 0; n < n_points; ++n) {
+      if (!dense && n + ahead < n_points)
+        for (int v = 0; v < corners; ++v)
+          __builtin_prefetch(table + static_cast<Eigen::Index>(rows[(n + ahead) * corners + v]) * f_count);
+      const Scalar* w = weights.data() + n * corners;
+      const std::uint32_t* r = rows.data() + n * corners;
+      for (int f = 0; f < f_count; ++f) {
+        Scalar sum = 0;
+        for (int v = 0; v < corners; ++v) sum += w[v] * table[static_cast<Eigen::Index>(r[v]) * f_count + f];
+        y[f * out_rows + n] = sum;
+      }
+    }
+    if (rows_out) {
+      const Eigen::Index first = static_cast<Eigen::Index>(l) * n_points * corners;
+      for (Eigen::Index i = 0; i < n_points * corners; ++i) {
+        rows_out[first + i] = static_cast<Scalar>(rows[i]);
+        kappa_out[first + i] = weights[i];
+      }
+    }
+  }
+}
+
 // T̄[row(v)] += Σ_s κ_{s,v} ȳ_s: into `gradient`, or into point n's row of `jacobian`.
 template <typename Scalar>
 void HashGridEncoding<Scalar>::table_adjoint(const Offsets& o, const Streams<Scalar>& in,
@@ -446,9 +530,16 @@ void HashGridEncoding<Scalar>::table_adjoint(const Offsets& o, const Streams<Sca
     throw std::logic_error("hash_grid encoding: backward without a recording forward pass");
   thread_local std::vector<Scalar> y_bar;
   y_bar.resize(static_cast<size_t>(streams * f_count));
+  constexpr Eigen::Index ahead = 8;  // points; see forward_values
   for (Eigen::Index l = 0; l < level_count; ++l) {
     const Eigen::Index first = grid_[l].info.first_row * f_count;
+    const bool hashed = !grid_[l].info.dense && !jacobian;
     for (Eigen::Index n = 0; n < n_points; ++n) {
+      if (hashed && n + ahead < n_points) {
+        const Scalar* next = saved[0].data() + (l * n_points + n + ahead) * corners;
+        for (int v = 0; v < corners; ++v)
+          __builtin_prefetch(gradient + first + static_cast<Eigen::Index>(next[v]) * f_count, 1);
+      }
       bool any = false;
       for (int s = 0; s < streams; ++s)
         for (int f = 0; f < f_count; ++f) {

@@ -127,6 +127,9 @@ class HashGridEncoding final : public autodiff::Module<Scalar> {
                      const autodiff::SavedTensors<Scalar>& saved,
                      const autodiff::Streams<Scalar>& out_adjoint, Scalar* gradient,
                      autodiff::JacobianRows<Scalar>* jacobian) const;
+  template <int D>
+  void forward_values(const Scalar* params, const autodiff::Streams<Scalar>& in,
+                      autodiff::Streams<Scalar>& out, Scalar* rows_out, Scalar* kappa_out) const;
   void corner_weights(const autodiff::StreamLayout& layout, const Offsets& o, const Cell& cell,
                       const Scalar* point, Scalar* kappa) const;
   void taylor_weights(const autodiff::StreamLayout& layout, const Offsets& o, const Cell& cell,

@@ -370,6 +370,26 @@ TEST_P(HashGridInNetwork, ParameterGradientsFromEveryStreamMatchCentralDifferenc
   }
 }
 
+// Values alone take a faster path (forward_values): the same values, and the same gradient
+// as the general path (checked above) for a loss of the value.
+TEST_P(HashGridInNetwork, ValuesAloneMatchTheGeneralPath) {
+  std::mt19937_64 rng(55);
+  const Network n = make_network(GetParam(), 6);
+  const Eigen::MatrixXd x = random_matrix(37, 2, rng, -0.9, 0.9);
+  const StreamLayout values(StreamSpec::values(2)), rich(rich_spec(rng));
+  Streams<double> a, b;
+  n.net.evaluate(n.theta.data(), values, x, a);
+  n.net.evaluate(n.theta.data(), rich, x, b);
+  EXPECT_LE((a.data - b.stream(0)).cwiseAbs().maxCoeff(), 1e-14 * b.stream(0).cwiseAbs().maxCoeff());
+  Eigen::VectorXd ga = Eigen::VectorXd::Zero(n.theta.size()), gb = ga;
+  n.net.value_and_gradient(n.theta.data(), values, x, testutil::SquaresLoss<double>(weights_of(values, "value")),
+                           ga.data());
+  n.net.value_and_gradient(n.theta.data(), rich, x, testutil::SquaresLoss<double>(weights_of(rich, "value")),
+                           gb.data());
+  EXPECT_LE((ga - gb).cwiseAbs().maxCoeff(), 1e-13 * gb.cwiseAbs().maxCoeff()) << GetParam();
+  EXPECT_GT(gb.segment(n.net.parameter_offset(2), n.encoding->parameter_count()).cwiseAbs().maxCoeff(), 0);
+}
+
 // r(x) = Δu₀ + u₁ ∂u₀/∂x: one residual per point.
 class Residual final : public autodiff::StreamResidual<double> {
  public:
