@@ -6,6 +6,7 @@
 // and can evaluate at any point without copies.
 #pragma once
 
+#include <random>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -34,6 +35,15 @@ class Module {
   virtual Eigen::Index input_width() const = 0;
   virtual Eigen::Index output_width() const = 0;
   virtual Eigen::Index parameter_count() const { return 0; }
+
+  // Draws this module's initial parameters (its slice) from `rng` and returns true; or
+  // returns false and leaves them to the network's owner, as a dense layer does, whose
+  // initialization depends on the network around it (fields/field.h).
+  virtual bool initialize(Scalar* params, std::mt19937_64& rng) const {
+    (void)params;
+    (void)rng;
+    return false;
+  }
 
   // out = f(in) for all streams. When `saved` is not null, keep there what backward reads.
   virtual void forward(const StreamLayout& layout, const Scalar* params,

@@ -7,6 +7,10 @@
 //   fourier     γ(x) = [sin(2π B x), cos(2π B x)], B ~ N(0, σ²), m × d (Tancik et al. 2020)
 //   cusp        γ(x) = [x, |x_a − c₁|, …, |x_a − c_k|] for planes x_a = c_k
 //   identity    γ(x) = x (no module)
+//   hash_grid   trainable multiresolution grids (Müller et al. 2022), fields/hash_grid.h
+//
+// Each type is one entry of a registry (fields/encoding_type.h) that validates its options,
+// reads and writes its config keys and checkpoint attributes, and creates its module.
 //
 // Sinusoids use sin only (cos z = sin(z + π/2)): W = [B; B], b = [0; π/2].
 //
@@ -46,18 +50,31 @@
 namespace nfield::fields {
 
 struct EncodingOptions {
-  std::string type = "identity";  // identity | positional | fourier | cusp
+  std::string type = "identity";  // a registered name (encoding_names())
   int frequencies = 6;            // positional: L, frequencies 2⁰π … 2^(L−1)π per axis
-  bool include_input = true;      // positional: keep x itself in γ(x)
+  bool include_input = true;      // positional, hash_grid: keep x itself in γ(x)
   int features = 128;             // fourier: m
   double scale = 10.0;            // fourier: σ
   std::uint64_t seed = 0;         // fourier: draws B
   int axis = 0;                   // cusp: the input a normal to the planes
   std::vector<double> at;         // cusp: the planes x_a = c, at least one
   int from_stage = 0;             // cusp: the training stage at which the features enter
+  int levels = 16;                // hash_grid: L
+  int features_per_level = 2;     // hash_grid: F
+  int log2_table_size = 19;       // hash_grid: T = 2^log2_table_size entries per level, 10…24
+  int base_resolution = 16;       // hash_grid: N_min cells per axis on the coarsest level
+  int finest_resolution = 512;    // hash_grid: N_max on the finest level
+  std::string interpolation = "linear";  // hash_grid: linear | smoothstep
+  double init_scale = 1e-4;       // hash_grid: tables start U(−init_scale, init_scale)
+  // The box [lower, upper] the inputs come from (the field's domain), one bound per input;
+  // both empty: [0, 1]^d. Set by the program from the problem's domain, not a config key;
+  // saved with the field. Only hash_grid reads it.
+  std::vector<double> lower, upper;
 
   // Throws std::invalid_argument naming the field, its value and the rule.
   void validate() const;
+  // validate(), then the rules that need the input dimension d (bounds, cusp axis).
+  void validate(int input_dim) const;
 };
 
 // The linear part W of γ for an input of dimension d: B for positional and Fourier (the 2π
@@ -65,7 +82,8 @@ struct EncodingOptions {
 // for identity.
 Eigen::MatrixXd encoding_matrix(const EncodingOptions& options, int input_dim);
 
-// The encoding module for inputs of dimension d; nullptr for the identity.
+// The encoding module for inputs of dimension d; nullptr for the identity. Its parameters
+// (hash_grid's tables) come first in a field's parameter vector.
 template <typename Scalar>
 std::unique_ptr<autodiff::Module<Scalar>> make_encoding(const EncodingOptions& options,
                                                         int input_dim);

@@ -71,9 +71,11 @@ void FieldOptions::validate() const {
   if (!(first_omega > 0)) reject("first_omega", std::to_string(first_omega), "must be > 0");
   if (!(hidden_omega > 0)) reject("hidden_omega", std::to_string(hidden_omega), "must be > 0");
   encoding.validate();
-  if (Registry<int>::lower(encoding.type) == "cusp" && encoding.axis >= input_dim)
-    reject("encoding.axis", std::to_string(encoding.axis),
-           "must be < input_dim = " + std::to_string(input_dim));
+  try {
+    encoding.validate(is_nerf(*this) ? 3 : input_dim);  // nerf encodes the position alone
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument("field." + std::string(e.what()));
+  }
 }
 
 std::vector<std::string> field_type_names() { return field_types().names(); }
@@ -126,8 +128,9 @@ void Field<Scalar>::initialize() {
   for (size_t m = 0; m < network_.modules().size(); ++m) {
     const auto& module = parameter_owner(*network_.modules()[m]);
     if (module.parameter_count() == 0) continue;
-    const Eigen::Index in = module.input_width(), out = module.output_width();
     Scalar* p = parameters_.data() + network_.parameter_offset(m);
+    if (module.initialize(p, rng)) continue;  // e.g. hash-grid tables
+    const Eigen::Index in = module.input_width(), out = module.output_width();
     double weight_bound, bias_bound = 0;
     if (siren) {
       weight_bound = dense_index == 0 ? 1.0 / in : std::sqrt(6.0 / in) / options_.hidden_omega;

@@ -11,6 +11,9 @@
 //          (fields/radiance_network.h); `hidden` is the trunk, `color_hidden` the colour
 //          layers, `encoding` encodes x; relu by default; weights initialized as mlp.
 //
+// Encodings with parameters (hash_grid) draw their own initialization (Module::initialize),
+// from the same engine, before the dense layers.
+//
 // `hidden` lists the H hidden widths: the SIREN reference network of the paper, d → 256,
 // three 256 → 256 layers and 256 → 1, is hidden = [256, 256, 256, 256].
 // Complex-valued fields use output_dim = 2 (real, imaginary).

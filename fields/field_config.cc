@@ -1,22 +1,10 @@
 // SPDX-License-Identifier: MIT
 #include "fields/field_config.h"
 
-#include <algorithm>
-#include <cmath>
-
 #include "fields/activations.h"
+#include "fields/encoding_type.h"
 
 namespace nfield::fields {
-
-namespace {
-
-std::vector<std::string> names_or_default(std::vector<std::string> names, int input_dim) {
-  if (names.empty())
-    for (int a = 0; a < input_dim; ++a) names.push_back(std::string(1, "xyzw"[a % 4]));
-  return names;
-}
-
-}  // namespace
 
 FieldOptions field_options_from_config(const io::ConfigNode& node, int input_dim, int output_dim,
                                        std::uint64_t seed, std::vector<std::string> input_names) {
@@ -48,23 +36,7 @@ FieldOptions field_options_from_config(const io::ConfigNode& node, int input_dim
   if (node.has("encoding")) {
     const io::ConfigNode e = node.child("encoding");
     o.encoding.type = e.get_choice("type", encoding_names(), "identity");
-    if (o.encoding.type == "positional") {
-      if (e.has("frequencies")) o.encoding.frequencies = e.get_in_range("frequencies", 1, 24);
-      o.encoding.include_input = e.get_or("include_input", true);
-    } else if (o.encoding.type == "fourier") {
-      if (e.has("features")) o.encoding.features = e.get_in_range("features", 1, 65536);
-      o.encoding.scale = e.get_or("scale", o.encoding.scale);
-      e.require("scale", o.encoding.scale > 0, "expected a number > 0");
-      o.encoding.seed = e.has("seed") ? static_cast<std::uint64_t>(e.get_nonnegative<std::int64_t>("seed")) : o.seed;
-    } else if (o.encoding.type == "cusp") {
-      const std::vector<std::string> axes = names_or_default(std::move(input_names), input_dim);
-      const std::string axis = e.get_choice("axis", axes);
-      o.encoding.axis = static_cast<int>(std::find(axes.begin(), axes.end(), axis) - axes.begin());
-      o.encoding.at = e.get<std::vector<double>>("at");
-      e.require("at", !o.encoding.at.empty(), "expected a non-empty list of plane positions");
-      for (double c : o.encoding.at) e.require("at", std::isfinite(c), "expected finite numbers");
-      if (e.has("from_stage")) o.encoding.from_stage = e.get_in_range("from_stage", 0, 1000);
-    }
+    encoding_type(o.encoding.type).read(e, {input_dim, o.seed, std::move(input_names)}, o.encoding);
     e.reject_unknown_keys();
   }
   node.reject_unknown_keys();
@@ -89,18 +61,9 @@ YAML::Node to_yaml(const FieldOptions& o, std::vector<std::string> input_names) 
   n["hidden_omega"] = o.hidden_omega;
   n["seed"] = o.seed;
   n["encoding"]["type"] = o.encoding.type;
-  if (o.encoding.type == "positional") {
-    n["encoding"]["frequencies"] = o.encoding.frequencies;
-    n["encoding"]["include_input"] = o.encoding.include_input;
-  } else if (o.encoding.type == "fourier") {
-    n["encoding"]["features"] = o.encoding.features;
-    n["encoding"]["scale"] = o.encoding.scale;
-    n["encoding"]["seed"] = o.encoding.seed;
-  } else if (o.encoding.type == "cusp") {
-    n["encoding"]["axis"] = names_or_default(std::move(input_names), o.input_dim).at(o.encoding.axis);
-    n["encoding"]["at"] = o.encoding.at;
-    if (o.encoding.from_stage > 0) n["encoding"]["from_stage"] = o.encoding.from_stage;
-  }
+  YAML::Node encoding = n["encoding"];
+  encoding_type(o.encoding.type).write(o.encoding, {o.input_dim, o.seed, std::move(input_names)},
+                                       encoding);
   return n;
 }
 

@@ -9,9 +9,13 @@
 //     hidden_omega: 30        # siren (mlp with sine: its frequency)
 //     activation: tanh        # mlp: sine | tanh | softplus | relu | identity
 //     seed: 0                 # default: training.seed
-//     encoding: {type: fourier, features: 128, scale: 10}   # identity | positional | fourier | cusp
+//     encoding: {type: fourier, features: 128, scale: 10}   # identity | positional | fourier | cusp | hash_grid
 //     encoding: {type: cusp, axis: y, at: [0.5]}             # |y − 0.5| as an extra input
 //     encoding: {type: cusp, axis: y, at: [0.5], from_stage: 1}   # … from training stage 1
+//     encoding: {type: hash_grid, levels: 8, base_resolution: 4, finest_resolution: 64,
+//                interpolation: smoothstep}                       # fields/hash_grid.h
+//
+// Each encoding type reads and writes its own keys (EncodingType, fields/encoding_type.h).
 #pragma once
 
 #include <yaml-cpp/yaml.h>

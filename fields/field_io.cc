@@ -4,9 +4,21 @@
 #include <span>
 #include <type_traits>
 
+#include "fields/dense.h"
+#include "fields/encoding_type.h"
 #include "io/registry.h"
 
 namespace nfield::fields {
+namespace {
+
+// Dense layers are saved as layers/K; the one other module with parameters, the encoding,
+// as encoding_parameters.
+template <typename Scalar>
+bool is_dense(const autodiff::Module<Scalar>& module) {
+  return dynamic_cast<const Dense<Scalar>*>(&module) != nullptr;
+}
+
+}  // namespace
 
 template <typename Scalar>
 void save_field(io::H5Writer& file, const Field<Scalar>& field, const std::string& group) {
@@ -28,24 +40,29 @@ void save_field(io::H5Writer& file, const Field<Scalar>& field, const std::strin
   file.write_attribute(group, "encoding_features", o.encoding.features);
   file.write_attribute(group, "encoding_scale", o.encoding.scale);
   file.write_attribute(group, "encoding_seed", static_cast<std::int64_t>(o.encoding.seed));
-  if (Registry<int>::lower(o.encoding.type) == "cusp") {
-    file.write_attribute(group, "encoding_axis", o.encoding.axis);
-    file.write_attribute(group, "encoding_at", std::span<const double>(o.encoding.at));
-    file.write_attribute(group, "encoding_from_stage", static_cast<std::int64_t>(o.encoding.from_stage));
+  if (!o.encoding.lower.empty()) {
+    file.write_attribute(group, "encoding_lower", std::span<const double>(o.encoding.lower));
+    file.write_attribute(group, "encoding_upper", std::span<const double>(o.encoding.upper));
   }
   if (Registry<int>::lower(o.type) == "nerf") {
     std::vector<std::int64_t> color(o.color_hidden.begin(), o.color_hidden.end());
     file.write_attribute(group, "color_hidden", std::span<const std::int64_t>(color));
     file.write_attribute(group, "direction_frequencies", o.direction_frequencies);
   }
+  encoding_type(o.encoding.type).save(file, group, o.encoding);
   if (field.encoding_matrix().rows() > 0) file.write(group + "/encoding", field.encoding_matrix());
   const auto& modules = field.network().modules();
   int layer = 0;
   for (size_t m = 0; m < modules.size(); ++m) {
     const auto& owner = parameter_owner(*modules[m]);
     const Eigen::Index in = owner.input_width(), out = owner.output_width();
-    if (owner.parameter_count() == 0) continue;
+    const Eigen::Index count = owner.parameter_count();
+    if (count == 0) continue;
     const Scalar* p = field.parameters().data() + field.network().parameter_offset(m);
+    if (!is_dense(owner)) {
+      file.write(group + "/encoding_parameters", Eigen::Map<const autodiff::Vector<Scalar>>(p, count));
+      continue;
+    }
     const std::string prefix = group + "/layers/" + std::to_string(layer++);
     file.write(prefix + "/weight", Eigen::Map<const autodiff::Matrix<Scalar>>(p, out, in));
     file.write(prefix + "/bias", Eigen::Map<const autodiff::Vector<Scalar>>(p + out * in, out));
@@ -69,13 +86,11 @@ FieldOptions load_field_options(const io::H5Reader& file, const std::string& gro
   o.encoding.features = static_cast<int>(file.read_attribute<std::int64_t>(group, "encoding_features"));
   o.encoding.scale = file.read_attribute<double>(group, "encoding_scale");
   o.encoding.seed = static_cast<std::uint64_t>(file.read_attribute<std::int64_t>(group, "encoding_seed"));
-  if (file.has_attribute(group, "encoding_axis"))
-    o.encoding.axis = static_cast<int>(file.read_attribute<std::int64_t>(group, "encoding_axis"));
-  if (file.has_attribute(group, "encoding_at"))
-    o.encoding.at = file.read_attribute<std::vector<double>>(group, "encoding_at");
-  if (file.has_attribute(group, "encoding_from_stage"))
-    o.encoding.from_stage =
-        static_cast<int>(file.read_attribute<std::int64_t>(group, "encoding_from_stage"));
+  if (file.has_attribute(group, "encoding_lower")) {
+    o.encoding.lower = file.read_attribute<std::vector<double>>(group, "encoding_lower");
+    o.encoding.upper = file.read_attribute<std::vector<double>>(group, "encoding_upper");
+  }
+  encoding_type(o.encoding.type).load(file, group, o.encoding);
   if (file.has_attribute(group, "color_hidden")) {
     const auto color = file.read_attribute<std::vector<std::int64_t>>(group, "color_hidden");
     o.color_hidden.assign(color.begin(), color.end());
@@ -94,8 +109,18 @@ Field<Scalar> load_field(const io::H5Reader& file, const std::string& group) {
   for (size_t m = 0; m < modules.size(); ++m) {
     const auto& owner = parameter_owner(*modules[m]);
     const Eigen::Index in = owner.input_width(), out = owner.output_width();
-    if (owner.parameter_count() == 0) continue;
+    const Eigen::Index count = owner.parameter_count();
+    if (count == 0) continue;
     Scalar* p = field.parameters().data() + field.network().parameter_offset(m);
+    if (!is_dense(owner)) {
+      const auto values = file.read_vector<Scalar>(group + "/encoding_parameters");
+      if (values.size() != count)
+        throw io::H5Error(file.path().string() + ": " + group + "/encoding_parameters has " +
+                          std::to_string(values.size()) + " values, the encoding needs " +
+                          std::to_string(count));
+      Eigen::Map<autodiff::Vector<Scalar>>(p, count) = values;
+      continue;
+    }
     const std::string prefix = group + "/layers/" + std::to_string(layer++);
     const auto weight = file.read_matrix<Scalar>(prefix + "/weight");
     const auto bias = file.read_vector<Scalar>(prefix + "/bias");

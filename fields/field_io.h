@@ -5,10 +5,17 @@
 //   /field                      group; attributes: type, input_dim, output_dim, hidden,
 //                               activation, first_omega, hidden_omega, seed, precision,
 //                               encoding_type, encoding_frequencies, encoding_include_input,
-//                               encoding_features, encoding_scale, encoding_seed
+//                               encoding_features, encoding_scale, encoding_seed,
+//                               encoding_lower, encoding_upper (when set), and each
+//                               encoding type's own (EncodingType::save: encoding_axis, …,
+//                               encoding_levels, …)
 //   /field/layers/K/weight      out × in (as PyTorch's nn.Linear.weight), layer K = 0, 1, …
+//                               (dense layers only)
 //   /field/layers/K/bias        out
 //   /field/encoding             the fixed encoding matrix B (m × d), when there is one
+//   /field/encoding_parameters  the trained parameters of an encoding, when it has any, in
+//                               its own layout (hash_grid: the tables level after level,
+//                               rows × features, fields/hash_grid.h)
 //
 // Values are stored in the field's own precision, so a save/load round trip is bit-exact.
 #pragma once

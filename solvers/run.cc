@@ -272,6 +272,11 @@ RunSetup load_run(const std::filesystem::path& config, const std::vector<std::st
                                               s.problem->field_input_dim(),
                                               s.problem->output_dim(), s.training.seed,
                                               s.problem->domain().input_names());
+  // Encodings that map the domain onto a grid (hash_grid) need its box; saved with the field.
+  const Eigen::VectorXd lower = s.problem->domain().input_lower();
+  const Eigen::VectorXd upper = s.problem->domain().input_upper();
+  s.field.encoding.lower.assign(lower.data(), lower.data() + lower.size());
+  s.field.encoding.upper.assign(upper.data(), upper.data() + upper.size());
   const auto stages = static_cast<int>(s.training.stages.size());
   if (s.field.encoding.from_stage > 0 && s.field.encoding.from_stage >= stages)
     throw s.root.child("field").child("encoding").error(

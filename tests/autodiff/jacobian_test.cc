@@ -222,6 +222,7 @@ std::vector<JacobianCase> jacobian_cases() {
     cases.push_back({{"mlp", "tanh", "identity"}, components});
   }
   cases.push_back({{"siren", "sine", "fourier"}, 2});  // a parameter-free module before the first Dense
+  cases.push_back({{"mlp", "tanh", "hash_grid"}, 1});  // an encoding with parameters
   return cases;
 }
 

@@ -8,6 +8,10 @@
 // Layout read (fields/field.h, fields/dense.h, fields/encodings.h):
 //   encoding   [x if positional and include_input, sin(x Bᵀ), cos(x Bᵀ)], B = encoding_matrix()
 //              cusp: [x, |x_a − c_k| for the planes c_k of options.encoding.at]
+//              hash_grid: [x if include_input, per level the interpolation of the cell's
+//              corner rows], written here
+//              from the definition in fields/hash_grid.h (only the level sizes come from
+//              fields::hash_grid_levels); its tables come first in the parameters
 //   hidden l   z = W a + b (W out × in column-major, then b), y = σ_l(z)
 //              siren: σ_l = sin(ω_l ·), ω_0 = first_omega, ω_l = hidden_omega for l > 0
 //              mlp:   σ_l = `activation` (sine with frequency hidden_omega)
@@ -22,14 +26,18 @@
 
 #include <ceres/jet.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <memory>
+#include <numbers>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "fields/activations.h"
 #include "fields/field.h"
+#include "fields/hash_grid.h"
 #include "io/registry.h"
 
 namespace nfield::testutil {
@@ -192,12 +200,21 @@ class ReferenceField {
         encoding_(std::move(encoding)) {
     siren_ = Registry<int>::lower(options_.type) == "siren";
     cusp_ = Registry<int>::lower(options_.encoding.type) == "cusp";
-    include_input_ = encoding_.rows() == 0 || cusp_ ||
-                     (Registry<int>::lower(options_.encoding.type) == "positional" &&
-                      options_.encoding.include_input);
+    hash_ = Registry<int>::lower(options_.encoding.type) == "hash_grid";
+    include_input_ = hash_ ? options_.encoding.include_input
+                           : encoding_.rows() == 0 || cusp_ ||
+                                 (Registry<int>::lower(options_.encoding.type) == "positional" &&
+                                  options_.encoding.include_input);
     Eigen::Index width = (include_input_ ? options_.input_dim : 0) +
                          (cusp_ ? 1 : 2) * encoding_.rows();
     Eigen::Index count = 0;
+    if (hash_) {
+      levels_ = fields::hash_grid_levels(options_.encoding, options_.input_dim);
+      const Eigen::Index f = options_.encoding.features_per_level;
+      width = (include_input_ ? options_.input_dim : 0) + static_cast<Eigen::Index>(levels_.size()) * f;
+      count = (levels_.back().first_row + levels_.back().rows) * f;
+      table_count_ = count;
+    }
     for (int h : options_.hidden) {
       count += h * width + h;
       width = h;
@@ -234,8 +251,10 @@ class ReferenceField {
     return run<T>(x, nullptr);
   }
 
-  // Pre-activations z of every hidden unit at x (and x_a − c of cusp features), for keeping
-  // finite differences away from kinks.
+  // Quantities whose sign changes where the field has a kink, for keeping finite differences
+  // away from kinks: pre-activations z of hidden units with a kinked activation (relu),
+  // x_a − c of cusp features, sin(π p_j) of every hash-grid level and axis (zero on cell
+  // faces).
   std::vector<double> preactivations(const std::vector<double>& x) const {
     std::vector<double> z;
     run<double>(x, &z);
@@ -258,6 +277,9 @@ class ReferenceField {
         if (pre) pre->push_back(value_of(z));
         a.push_back(value_of(z) < 0 ? -z : z);
       }
+    } else if (hash_) {
+      const std::vector<T> features = hash_grid(x, pre);
+      a.insert(a.end(), features.begin(), features.end());
     } else if (encoding_.rows() > 0) {
       std::vector<T> z(encoding_.rows(), constant<T>(0.0));
       for (Eigen::Index r = 0; r < encoding_.rows(); ++r)
@@ -265,7 +287,7 @@ class ReferenceField {
       for (const T& zr : z) a.push_back(sin(zr));
       for (const T& zr : z) a.push_back(cos(zr));
     }
-    const double* p = parameters_.data();
+    const double* p = parameters_.data() + table_count_;
     auto dense = [&p](const std::vector<T>& in, Eigen::Index out_width) {
       const Eigen::Index in_width = static_cast<Eigen::Index>(in.size());
       std::vector<T> out(out_width);
@@ -282,7 +304,7 @@ class ReferenceField {
       std::vector<T> z = dense(a, options_.hidden[l]);
       const fields::ActivationSpec spec = activation(l);
       for (T& zr : z) {
-        if (pre) pre->push_back(value_of(zr));
+        if (pre && spec.name == "relu") pre->push_back(value_of(zr));
         bool known = false;
         T y = closed_form_activation<T>(spec.name, spec.frequency, zr, &known);
         zr = known ? y : apply_tables<T>(*tables_[l], zr);
@@ -292,10 +314,62 @@ class ReferenceField {
     return dense(a, options_.output_dim);
   }
 
+  // y_l(x) = Σ_corners Π_j (φ_j or 1 − φ_j) T_l[row(corner)], level after level.
+  template <typename T>
+  std::vector<T> hash_grid(const std::vector<T>& x, std::vector<double>* pre) const {
+    static constexpr std::uint32_t kPrimes[4] = {1u, 2654435761u, 805459861u, 3674653429u};
+    const fields::EncodingOptions& e = options_.encoding;
+    const int d = options_.input_dim, features = e.features_per_level;
+    const bool smooth = Registry<int>::lower(e.interpolation) == "smoothstep";
+    std::vector<T> out;
+    for (const fields::HashGridLevel& level : levels_) {
+      const int n = level.resolution;
+      std::vector<T> phi(d);
+      std::vector<std::int64_t> cell(d);
+      for (int j = 0; j < d; ++j) {
+        const double lo = e.lower.empty() ? 0.0 : e.lower[j];
+        const double hi = e.upper.empty() ? 1.0 : e.upper[j];
+        const T p = (x[j] - constant<T>(lo)) * constant<T>(n / (hi - lo)) + constant<T>(0.5);
+        if (pre) pre->push_back(std::sin(std::numbers::pi * value_of(p)));
+        const double c = std::clamp(std::floor(value_of(p)), 0.0, static_cast<double>(n));
+        cell[j] = static_cast<std::int64_t>(c);
+        const T t = p - constant<T>(c);
+        if (!smooth)
+          phi[j] = t;
+        else if (value_of(t) < 0 || value_of(t) > 1)
+          phi[j] = constant<T>(value_of(t) < 0 ? 0.0 : 1.0);
+        else
+          phi[j] = t * t * (constant<T>(3.0) - constant<T>(2.0) * t);
+      }
+      std::vector<T> y(features, constant<T>(0.0));
+      for (int corner = 0; corner < (1 << d); ++corner) {
+        T w = constant<T>(1.0);
+        std::uint64_t dense_row = 0, stride = 1;
+        std::uint32_t hash = 0;
+        for (int j = 0; j < d; ++j) {
+          const int bit = (corner >> j) & 1;
+          w = w * (bit ? phi[j] : constant<T>(1.0) - phi[j]);
+          const std::int64_t vertex = cell[j] + bit;
+          dense_row += static_cast<std::uint64_t>(vertex) * stride;
+          stride *= static_cast<std::uint64_t>(n) + 2;
+          hash ^= static_cast<std::uint32_t>(vertex) * kPrimes[j];
+        }
+        const std::uint64_t row =
+            level.dense ? dense_row : hash % (std::uint64_t{1} << e.log2_table_size);
+        for (int f = 0; f < features; ++f)
+          y[f] = y[f] + w * constant<T>(parameters_[(level.first_row + row) * features + f]);
+      }
+      out.insert(out.end(), y.begin(), y.end());
+    }
+    return out;
+  }
+
   fields::FieldOptions options_;
   Eigen::VectorXd parameters_;
   Eigen::MatrixXd encoding_;
-  bool siren_ = true, cusp_ = false, include_input_ = true;
+  bool siren_ = true, cusp_ = false, hash_ = false, include_input_ = true;
+  std::vector<fields::HashGridLevel> levels_;
+  Eigen::Index table_count_ = 0;
   std::vector<std::shared_ptr<autodiff::ElementwiseFunction<double>>> tables_;
 };
 

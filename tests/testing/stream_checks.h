@@ -285,7 +285,9 @@ inline std::string case_name(const ::testing::TestParamInfo<NetworkCase>& info) 
 }
 
 // A small random network: hidden [8, 8], moderate encodings (positional L = 3, Fourier
-// features 8 with σ = 1), SIREN with its defaults ω₀ = 30, an mlp sine with frequency 2.
+// features 8 with σ = 1, hash grid of 3 smoothstep levels N = 2, 3, 6 over the points' box
+// [−1, 1]^d with 2^10 rows, hashed for d = 4, tables U(−0.5, 0.5)), SIREN with its defaults ω₀ = 30, an mlp sine
+// with frequency 2.
 inline fields::FieldOptions small_options(const NetworkCase& c, int input_dim, int output_dim,
                                           std::uint64_t seed, std::vector<int> hidden = {8, 8}) {
   fields::FieldOptions o;
@@ -302,18 +304,28 @@ inline fields::FieldOptions small_options(const NetworkCase& c, int input_dim, i
   o.encoding.seed = seed + 17;
   o.encoding.axis = input_dim - 1;
   o.encoding.at = {-0.3, 0.45};
+  o.encoding.levels = 3;
+  o.encoding.features_per_level = 2;
+  o.encoding.log2_table_size = 10;
+  o.encoding.base_resolution = 2;
+  o.encoding.finest_resolution = 6;
+  o.encoding.interpolation = "smoothstep";
+  o.encoding.init_scale = 0.5;  // features of order 1, as after training
+  o.encoding.lower.assign(input_dim, -1.0);
+  o.encoding.upper.assign(input_dim, 1.0);
   o.seed = seed;
   return o;
 }
 
-// Whether the network has kinks (ReLU, cusp features) that finite differences must not
-// straddle.
+// Whether the network has kinks (ReLU, cusp features, hash-grid cell faces) that finite
+// differences must not straddle.
 inline bool has_kinks(const fields::FieldOptions& o) {
   return (Registry<int>::lower(o.type) != "siren" && Registry<int>::lower(o.activation) == "relu") ||
-         Registry<int>::lower(o.encoding.type) == "cusp";
+         Registry<int>::lower(o.encoding.type) == "cusp" ||
+         Registry<int>::lower(o.encoding.type) == "hash_grid";
 }
 
-// Signs of every hidden pre-activation at every point.
+// Signs of ReferenceField::preactivations at every point.
 inline std::vector<bool> kink_pattern(const ReferenceField& ref, const Eigen::MatrixXd& x) {
   std::vector<bool> pattern;
   for (Eigen::Index p = 0; p < x.rows(); ++p) {

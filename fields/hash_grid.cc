@@ -1,0 +1,787 @@
+// SPDX-License-Identifier: MIT
+#include "fields/hash_grid.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "io/registry.h"
+
+namespace nfield::fields {
+
+using autodiff::Matrix;
+using autodiff::StreamLayout;
+using autodiff::Streams;
+
+namespace {
+
+constexpr int kMaxDim = 4;
+constexpr int kMaxCorners = 1 << kMaxDim;
+constexpr std::uint32_t kPrimes[kMaxDim] = {1u, 2654435761u, 805459861u, 3674653429u};
+
+bool is_smoothstep(const EncodingOptions& o) {
+  return Registry<int>::lower(o.interpolation) == "smoothstep";
+}
+
+// out = a·b for series of n coefficients, truncated.
+template <typename Scalar>
+void series_product(const Scalar* a, const Scalar* b, Scalar* out, int n) {
+  for (int k = 0; k < n; ++k) {
+    Scalar sum = 0;
+    for (int i = 0; i <= k; ++i) sum += a[i] * b[k - i];
+    out[k] = sum;
+  }
+}
+
+// The adjoint of out = a·b with respect to a: ā_i += Σ_{k ≥ i} ō_k b_{k−i}.
+template <typename Scalar>
+void series_product_adjoint(const Scalar* out_bar, const Scalar* b, Scalar* a_bar, int n) {
+  for (int i = 0; i < n; ++i) {
+    Scalar sum = 0;
+    for (int k = i; k < n; ++k) sum += out_bar[k] * b[k - i];
+    a_bar[i] += sum;
+  }
+}
+
+}  // namespace
+
+std::vector<HashGridLevel> hash_grid_levels(const EncodingOptions& o, int input_dim) {
+  const double table = std::ldexp(1.0, o.log2_table_size);
+  const double growth =
+      o.levels > 1 ? std::exp((std::log(static_cast<double>(o.finest_resolution)) -
+                               std::log(static_cast<double>(o.base_resolution))) /
+                              (o.levels - 1))
+                   : 1.0;
+  std::vector<HashGridLevel> levels(o.levels);
+  Eigen::Index first = 0;
+  for (int l = 0; l < o.levels; ++l) {
+    // The relative nudge keeps ⌊N_min b^(L−1)⌋ at N_max against rounding in exp and log.
+    const double n = std::floor(o.base_resolution * std::pow(growth, l) * (1 + 1e-9));
+    HashGridLevel& level = levels[l];
+    level.resolution = static_cast<int>(std::clamp(n, 1.0, static_cast<double>(o.finest_resolution)));
+    const double vertices = std::pow(level.resolution + 2.0, input_dim);
+    level.dense = vertices <= table;
+    level.rows = static_cast<Eigen::Index>(level.dense ? vertices : table);
+    level.first_row = first;
+    first += level.rows;
+  }
+  return levels;
+}
+
+// ---------------------------------------------------------------------------------------
+// Per point and level.
+
+template <typename Scalar>
+struct HashGridEncoding<Scalar>::Cell {
+  std::uint32_t rows[kMaxCorners];  // table row of each corner; bit j of the corner index is v_j − c_j
+  Scalar phi[kMaxDim][4];           // φ_j and its derivatives of order 1–3 in x_j
+  Scalar t[kMaxDim];                // t_j (held in [0, 1] where smoothstep holds it)
+  Scalar scale[kMaxDim];            // ∂t_j/∂x_j: 0 where t_j is held
+};
+
+// A point's input streams, gathered into one contiguous run per point:
+//   x (d) | tangents a⁽ⁱ⁾ (T·d) | operator inputs a^[q] (Q·d) | M_q = Σᵢⱼ Cᵢⱼ a⁽ⁱ⁾a⁽ʲ⁾ᵀ,
+//   symmetrized (Q·d²) | Taylor inputs a_{p,k} (P·K·d)
+// so that Σᵢⱼ Cᵢⱼ a⁽ⁱ⁾ᵀ ∇²W a⁽ʲ⁾ = ⟨∇²W, M_q⟩ costs d² per corner, whatever T is.
+template <typename Scalar>
+struct HashGridEncoding<Scalar>::Offsets {
+  Offsets(const StreamLayout& layout, int d)
+      : d(d),
+        tangents(layout.tangents()),
+        operators(layout.operators()),
+        dirs(layout.taylor_dirs()),
+        order(layout.taylor_order()),
+        streams(layout.count()),
+        corners(1 << d) {
+    a = d;
+    b = a + tangents * d;
+    m = b + operators * d;
+    taylor = m + operators * d * d;
+    stride = taylor + dirs * order * d;
+  }
+  int taylor_at(int p, int k) const { return taylor + (p * order + k - 1) * d; }
+
+  int d, tangents, operators, dirs, order, streams, corners;
+  int a, b, m, taylor, stride;
+};
+
+namespace {
+
+// Derivative of order `order` of corner v's factor on axis j: φ_j if v_j = c_j + 1,
+// 1 − φ_j if v_j = c_j.
+template <typename Cell>
+auto factor(const Cell& cell, int v, int j, int order) {
+  const auto f = cell.phi[j][order];
+  if ((v >> j) & 1) return f;
+  return order == 0 ? 1 - f : -f;
+}
+
+}  // namespace
+
+template <typename Scalar>
+HashGridEncoding<Scalar>::HashGridEncoding(const EncodingOptions& options, int input_dim)
+    : dim_(input_dim),
+      features_(options.features_per_level),
+      smoothstep_(is_smoothstep(options)),
+      include_input_(options.include_input),
+      init_scale_(options.init_scale) {
+  if (input_dim < 1 || input_dim > kMaxDim)
+    throw std::invalid_argument("hash_grid encoding: input_dim = " + std::to_string(input_dim) +
+                                ": must be in [1, 4]");
+  levels_ = hash_grid_levels(options, input_dim);
+  double range[kMaxDim];
+  for (int j = 0; j < dim_; ++j) {
+    const double lo = options.lower.empty() ? 0.0 : options.lower[j];
+    const double hi = options.upper.empty() ? 1.0 : options.upper[j];
+    lower_[j] = static_cast<Scalar>(lo);
+    range[j] = hi - lo;
+  }
+  for (const HashGridLevel& info : levels_) {
+    Level level{};
+    level.info = info;
+    std::uint64_t stride = 1;
+    for (int j = 0; j < dim_; ++j) {
+      level.scale[j] = static_cast<Scalar>(info.resolution / range[j]);
+      level.stride[j] = info.dense ? static_cast<std::uint32_t>(stride) : 0u;
+      stride *= static_cast<std::uint64_t>(info.resolution) + 2;
+    }
+    level.mask = static_cast<std::uint32_t>((std::uint64_t{1} << options.log2_table_size) - 1);
+    grid_.push_back(level);
+  }
+  rows_ = levels_.back().first_row + levels_.back().rows;
+}
+
+template <typename Scalar>
+std::uint32_t HashGridEncoding<Scalar>::row(int level, const int* vertex) const {
+  const Level& g = grid_.at(level);
+  std::uint32_t r = 0;
+  for (int j = 0; j < dim_; ++j) {
+    const auto v = static_cast<std::uint32_t>(vertex[j]);
+    if (g.info.dense)
+      r += v * g.stride[j];
+    else
+      r ^= v * kPrimes[j];
+  }
+  return g.info.dense ? r : (r & g.mask);
+}
+
+template <typename Scalar>
+bool HashGridEncoding<Scalar>::initialize(Scalar* params, std::mt19937_64& rng) const {
+  // From the raw engine, like the dense layers: independent of library distributions.
+  for (Eigen::Index i = 0; i < parameter_count(); ++i)
+    params[i] = static_cast<Scalar>(
+        init_scale_ * (2.0 * static_cast<double>(rng() >> 11) * 0x1.0p-53 - 1.0));
+  return true;
+}
+
+template <typename Scalar>
+void HashGridEncoding<Scalar>::locate(const Level& level, const Scalar* x, Cell& cell) const {
+  const Scalar last = static_cast<Scalar>(level.info.resolution);
+  std::uint32_t term[kMaxDim][2];
+  for (int j = 0; j < dim_; ++j) {
+    const Scalar s = level.scale[j];
+    const Scalar p = (x[j] - lower_[j]) * s + Scalar(0.5);
+    Scalar c = std::floor(p);
+    if (!(c >= 0)) c = 0;  // NaN too
+    if (c > last) c = last;
+    Scalar t = p - c;
+    Scalar* f = cell.phi[j];
+    cell.scale[j] = s;
+    if (!smoothstep_) {
+      f[0] = t;
+      f[1] = s;
+      f[2] = f[3] = 0;
+    } else if (t >= 0 && t <= 1) {
+      f[0] = t * t * (3 - 2 * t);
+      f[1] = 6 * s * t * (1 - t);
+      f[2] = 6 * s * s * (1 - 2 * t);
+      f[3] = -12 * s * s * s;
+    } else {
+      t = t < 0 ? Scalar(0) : Scalar(1);
+      f[0] = t;
+      f[1] = f[2] = f[3] = 0;
+      cell.scale[j] = 0;
+    }
+    cell.t[j] = t;
+    const auto v = static_cast<std::uint32_t>(static_cast<int>(c));
+    const std::uint32_t weight = level.info.dense ? level.stride[j] : kPrimes[j];
+    term[j][0] = v * weight;
+    term[j][1] = (v + 1) * weight;
+  }
+  const int corners = 1 << dim_;
+  for (int v = 0; v < corners; ++v) {
+    std::uint32_t r = 0;
+    if (level.info.dense) {
+      for (int j = 0; j < dim_; ++j) r += term[j][(v >> j) & 1];
+    } else {
+      for (int j = 0; j < dim_; ++j) r ^= term[j][(v >> j) & 1];
+      r &= level.mask;
+    }
+    cell.rows[v] = r;
+  }
+}
+
+template <typename Scalar>
+void HashGridEncoding<Scalar>::gather(const StreamLayout& layout, const Offsets& o,
+                                      const Streams<Scalar>& in, std::vector<Scalar>& inputs) const {
+  const Eigen::Index n_points = in.points;
+  const int d = dim_;
+  const Matrix<Scalar>& a = in.data;
+  inputs.resize(static_cast<size_t>(n_points * o.stride));
+  for (Eigen::Index n = 0; n < n_points; ++n) {
+    Scalar* p = inputs.data() + n * o.stride;
+    for (int j = 0; j < d; ++j) p[j] = a(n, j);
+    for (int i = 0; i < o.tangents; ++i)
+      for (int j = 0; j < d; ++j) p[o.a + i * d + j] = a(layout.tangent(i) * n_points + n, j);
+    for (int q = 0; q < o.operators; ++q) {
+      for (int j = 0; j < d; ++j) p[o.b + q * d + j] = a(layout.op(q) * n_points + n, j);
+      Scalar* m = p + o.m + q * d * d;
+      std::fill(m, m + d * d, Scalar(0));
+      for (const autodiff::OperatorTerm& term : layout.terms(q)) {
+        const Scalar* ai = p + o.a + term.i * d;
+        const Scalar* aj = p + o.a + term.j * d;
+        const Scalar half = static_cast<Scalar>(term.coefficient / 2);
+        for (int j = 0; j < d; ++j)
+          for (int k = 0; k < d; ++k) m[j * d + k] += half * (ai[j] * aj[k] + aj[j] * ai[k]);
+      }
+    }
+    for (int dir = 0; dir < o.dirs; ++dir)
+      for (int k = 1; k <= o.order; ++k)
+        for (int j = 0; j < d; ++j)
+          p[o.taylor_at(dir, k) + j] = a(layout.taylor(dir, k) * n_points + n, j);
+  }
+}
+
+// κ[s·C + v] for every stream s and corner v (the header's table).
+template <typename Scalar>
+void HashGridEncoding<Scalar>::corner_weights(const StreamLayout& layout, const Offsets& o,
+                                              const Cell& cell, const Scalar* point,
+                                              Scalar* kappa) const {
+  const int d = dim_, corners = o.corners;
+  const bool first = o.tangents > 0 || o.operators > 0, second = o.operators > 0;
+  for (int v = 0; v < corners; ++v) {
+    Scalar g[kMaxDim][3];
+    for (int j = 0; j < d; ++j)
+      for (int k = 0; k <= (second ? 2 : first ? 1 : 0); ++k) g[j][k] = factor(cell, v, j, k);
+    Scalar w = 1;
+    for (int j = 0; j < d; ++j) w *= g[j][0];
+    kappa[v] = w;
+    if (!first) continue;
+    Scalar grad[kMaxDim], hess[kMaxDim][kMaxDim];
+    for (int j = 0; j < d; ++j) {
+      Scalar p = g[j][1];
+      for (int m = 0; m < d; ++m)
+        if (m != j) p *= g[m][0];
+      grad[j] = p;
+    }
+    if (second)
+      for (int j = 0; j < d; ++j)
+        for (int k = j; k < d; ++k) {
+          Scalar p = j == k ? g[j][2] : g[j][1] * g[k][1];
+          for (int m = 0; m < d; ++m)
+            if (m != j && m != k) p *= g[m][0];
+          hess[j][k] = hess[k][j] = p;
+        }
+    for (int i = 0; i < o.tangents; ++i) {
+      const Scalar* a = point + o.a + i * d;
+      Scalar sum = 0;
+      for (int j = 0; j < d; ++j) sum += grad[j] * a[j];
+      kappa[layout.tangent(i) * corners + v] = sum;
+    }
+    for (int q = 0; q < o.operators; ++q) {
+      const Scalar* b = point + o.b + q * d;
+      const Scalar* m = point + o.m + q * d * d;
+      Scalar sum = 0;
+      for (int j = 0; j < d; ++j) sum += grad[j] * b[j];
+      for (int j = 0; j < d; ++j)
+        for (int k = 0; k < d; ++k) sum += hess[j][k] * m[j * d + k];
+      kappa[layout.op(q) * corners + v] = sum;
+    }
+  }
+  if (o.dirs > 0) taylor_weights(layout, o, cell, point, kappa);
+}
+
+namespace {
+
+// Scratch series of one point and level: φ_j(τ) per axis, t_j(τ), t², t³ and two rows of
+// corner products.
+template <typename Scalar>
+struct SeriesScratch {
+  void size(int d, int corners, int n) {
+    this->n = n;
+    data.resize(static_cast<size_t>((4 * d + 2 * corners + 4) * n));
+    phi = data.data();
+    t = phi + d * n;
+    t2 = t + d * n;
+    t3 = t2 + d * n;
+    products = t3 + d * n;
+    next = products + corners * n;
+    one_minus = next + corners * n;
+    tmp = one_minus + n;
+    bar = tmp + n;
+    bar2 = bar + n;
+  }
+  int n = 0;
+  std::vector<Scalar> data;
+  Scalar *phi, *t, *t2, *t3, *products, *next, *one_minus, *tmp, *bar, *bar2;
+};
+
+}  // namespace
+
+// φ_j(t_j(τ)) with t_j(τ) = t_j + s_j Σ_k a_{p,k,j} τᵏ; then every corner's product.
+template <typename Scalar>
+void HashGridEncoding<Scalar>::taylor_weights(const StreamLayout& layout, const Offsets& o,
+                                              const Cell& cell, const Scalar* point,
+                                              Scalar* kappa) const {
+  const int d = dim_, corners = o.corners, order = o.order, n = order + 1;
+  thread_local SeriesScratch<Scalar> w;
+  w.size(d, corners, n);
+  for (int dir = 0; dir < o.dirs; ++dir) {
+    for (int j = 0; j < d; ++j) series(o, cell, point, dir, j, w.t + j * n, w.t2 + j * n,
+                                       w.t3 + j * n, w.phi + j * n);
+    std::fill(w.products, w.products + n, Scalar(0));
+    w.products[0] = 1;
+    for (int j = 0, count = 1; j < d; ++j, count *= 2) {
+      const Scalar* phi = w.phi + j * n;
+      for (int k = 0; k < n; ++k) w.one_minus[k] = (k == 0 ? 1 : 0) - phi[k];
+      for (int v = 0; v < count; ++v) {
+        series_product(w.products + v * n, w.one_minus, w.next + v * n, n);
+        series_product(w.products + v * n, phi, w.next + (v + count) * n, n);
+      }
+      std::swap(w.products, w.next);
+    }
+    for (int v = 0; v < corners; ++v)
+      for (int k = 1; k <= order; ++k)
+        kappa[layout.taylor(dir, k) * corners + v] = w.products[v * n + k];
+  }
+}
+
+// The series of t_j and φ_j along Taylor direction `dir` (n = K + 1 coefficients each).
+template <typename Scalar>
+void HashGridEncoding<Scalar>::series(const Offsets& o, const Cell& cell, const Scalar* point,
+                                      int dir, int j, Scalar* t, Scalar* t2, Scalar* t3,
+                                      Scalar* phi) const {
+  const int n = o.order + 1;
+  t[0] = cell.t[j];
+  for (int k = 1; k < n; ++k) t[k] = cell.scale[j] * point[o.taylor_at(dir, k) + j];
+  if (!smoothstep_) {
+    std::copy(t, t + n, phi);
+  } else {
+    series_product(t, t, t2, n);
+    series_product(t2, t, t3, n);
+    for (int k = 0; k < n; ++k) phi[k] = 3 * t2[k] - 2 * t3[k];
+  }
+  phi[0] = cell.phi[j][0];
+}
+
+// ---------------------------------------------------------------------------------------
+// Passes.
+
+template <typename Scalar>
+void HashGridEncoding<Scalar>::forward(const StreamLayout& layout, const Scalar* params,
+                                       const Streams<Scalar>& in, Streams<Scalar>& out,
+                                       autodiff::SavedTensors<Scalar>* saved) const {
+  const Offsets o(layout, dim_);
+  const Eigen::Index n_points = in.points;
+  const int corners = o.corners, streams = o.streams, f_count = features_;
+  const auto level_count = static_cast<Eigen::Index>(grid_.size());
+  thread_local std::vector<Scalar> inputs, kappa, acc;
+  kappa.resize(static_cast<size_t>(streams * corners));
+  acc.resize(static_cast<size_t>(streams * f_count));
+  const Eigen::Index first_column = input_columns();
+  out.resize(n_points, in.count, first_column + level_count * f_count);
+  if (first_column > 0) out.data.leftCols(first_column) = in.data;
+  Scalar *rows_out = nullptr, *kappa_out = nullptr;
+  if (saved) {
+    // Rows are below 2^24, so even a float holds them exactly.
+    saved->resize(2);
+    (*saved)[0].resize(corners, n_points * level_count);
+    (*saved)[1].resize(streams * corners, n_points * level_count);
+    rows_out = (*saved)[0].data();
+    kappa_out = (*saved)[1].data();
+  }
+  if (streams == 1) {
+    switch (dim_) {
+      case 1: return forward_values<1>(params, in, out, rows_out, kappa_out);
+      case 2: return forward_values<2>(params, in, out, rows_out, kappa_out);
+      case 3: return forward_values<3>(params, in, out, rows_out, kappa_out);
+      default: return forward_values<4>(params, in, out, rows_out, kappa_out);
+    }
+  }
+  gather(layout, o, in, inputs);
+  Cell cell;
+  // Level by level: one table at a time stays in cache.
+  for (Eigen::Index l = 0; l < level_count; ++l) {
+    const Level& level = grid_[l];
+    const Scalar* table = params + level.info.first_row * f_count;
+    for (Eigen::Index n = 0; n < n_points; ++n) {
+      const Scalar* point = inputs.data() + n * o.stride;
+      locate(level, point, cell);
+      corner_weights(layout, o, cell, point, kappa.data());
+      std::fill(acc.begin(), acc.end(), Scalar(0));
+      for (int v = 0; v < corners; ++v) {
+        const Scalar* entry = table + static_cast<Eigen::Index>(cell.rows[v]) * f_count;
+        for (int s = 0; s < streams; ++s) {
+          const Scalar k = kappa[s * corners + v];
+          for (int f = 0; f < f_count; ++f) acc[s * f_count + f] += k * entry[f];
+        }
+      }
+      for (int s = 0; s < streams; ++s)
+        for (int f = 0; f < f_count; ++f)
+          out.data(s * n_points + n, first_column + l * f_count + f) = acc[s * f_count + f];
+      if (saved) {
+        const Eigen::Index column = l * n_points + n;
+        for (int v = 0; v < corners; ++v)
+          rows_out[column * corners + v] = static_cast<Scalar>(cell.rows[v]);
+        std::copy(kappa.begin(), kappa.end(), kappa_out + column * streams * corners);
+      }
+    }
+  }
+}
+
+// The value stream alone (radiance fields, fits of values), the common case: the same
+// weights and rows as locate and corner_weights (bit for bit: the same products in the same
+// order), the 2^D weights by doubling over the axes, with loops of fixed length. Per level,
+// a first pass finds every point's rows and weights, and the second gathers the table rows,
+// prefetching a few points ahead: hashed rows are scattered over megabytes, and the loads of
+// several points then overlap instead of waiting one after the other.
+template <typename Scalar>
+template <int D>
+void HashGridEncoding<Scalar>::forward_values(const Scalar* params, const Streams<Scalar>& in,
+                                              Streams<Scalar>& out, Scalar* rows_out,
+                                              Scalar* kappa_out) const {
+  constexpr int corners = 1 << D;
+  constexpr Eigen::Index ahead = 8;  // points
+  const Eigen::Index n_points = in.points, in_rows = in.data.rows(), out_rows = out.data.rows();
+  const int f_count = features_;
+  const Scalar* x = in.data.data();
+  thread_local std::vector<std::uint32_t> rows;
+  thread_local std::vector<Scalar> weights;
+  rows.resize(static_cast<size_t>(n_points * corners));
+  weights.resize(static_cast<size_t>(n_points * corners));
+  for (size_t l = 0; l < grid_.size(); ++l) {
+    const Level& level = grid_[l];
+    const bool dense = level.info.dense;
+    const Scalar last = static_cast<Scalar>(level.info.resolution);
+    for (Eigen::Index n = 0; n < n_points; ++n) {
+      Scalar* w = weights.data() + n * corners;
+      std::uint32_t* r = rows.data() + n * corners;
+      w[0] = 1;
+      r[0] = 0;
+      for (int j = 0; j < D; ++j) {
+        const Scalar p = (x[j * in_rows + n] - lower_[j]) * level.scale[j] + Scalar(0.5);
+        Scalar c = std::floor(p);
+        if (!(c >= 0)) c = 0;
+        if (c > last) c = last;
+        const Scalar t = p - c;
+        const Scalar phi = !smoothstep_              ? t
+                           : (t >= 0 && t <= 1)      ? t * t * (3 - 2 * t)
+                           : t < 0                   ? Scalar(0)
+                                                     : Scalar(1);
+        const auto v = static_cast<std::uint32_t>(static_cast<int>(c));
+        const std::uint32_t weight = dense ? level.stride[j] : kPrimes[j];
+        const std::uint32_t a0 = v * weight, a1 = (v + 1) * weight;
+        for (int k = 0; k < (1 << j); ++k) {
+          w[k + (1 << j)] = w[k] * phi;
+          w[k] *= 1 - phi;
+          r[k + (1 << j)] = dense ? r[k] + a1 : r[k] ^ a1;
+          r[k] = dense ? r[k] + a0 : r[k] ^ a0;
+        }
+      }
+      if (!dense)
+        for (int v = 0; v < corners; ++v) r[v] &= level.mask;
+    }
+    const Scalar* table = params + level.info.first_row * f_count;
+    Scalar* y = out.data.data() + (input_columns() + static_cast<Eigen::Index>(l) * f_count) * out_rows;
+    for (Eigen::Index n = 0; n < n_points; ++n) {
+      if (!dense && n + ahead < n_points)
+        for (int v = 0; v < corners; ++v)
+          __builtin_prefetch(table + static_cast<Eigen::Index>(rows[(n + ahead) * corners + v]) * f_count);
+      const Scalar* w = weights.data() + n * corners;
+      const std::uint32_t* r = rows.data() + n * corners;
+      for (int f = 0; f < f_count; ++f) {
+        Scalar sum = 0;
+        for (int v = 0; v < corners; ++v) sum += w[v] * table[static_cast<Eigen::Index>(r[v]) * f_count + f];
+        y[f * out_rows + n] = sum;
+      }
+    }
+    if (rows_out) {
+      const Eigen::Index first = static_cast<Eigen::Index>(l) * n_points * corners;
+      for (Eigen::Index i = 0; i < n_points * corners; ++i) {
+        rows_out[first + i] = static_cast<Scalar>(rows[i]);
+        kappa_out[first + i] = weights[i];
+      }
+    }
+  }
+}
+
+// T̄[row(v)] += Σ_s κ_{s,v} ȳ_s: into `gradient`, or into point n's row of `jacobian`.
+template <typename Scalar>
+void HashGridEncoding<Scalar>::table_adjoint(const Offsets& o, const Streams<Scalar>& in,
+                                             const autodiff::SavedTensors<Scalar>& saved,
+                                             const Streams<Scalar>& out_adjoint,
+                                             Scalar* gradient,
+                                             autodiff::JacobianRows<Scalar>* jacobian) const {
+  const Eigen::Index n_points = in.points;
+  const int corners = o.corners, streams = o.streams, f_count = features_;
+  const auto level_count = static_cast<Eigen::Index>(grid_.size());
+  if (saved.size() != 2 || saved[0].cols() != n_points * level_count)
+    throw std::logic_error("hash_grid encoding: backward without a recording forward pass");
+  thread_local std::vector<Scalar> y_bar;
+  y_bar.resize(static_cast<size_t>(streams * f_count));
+  constexpr Eigen::Index ahead = 8;  // points; see forward_values
+  for (Eigen::Index l = 0; l < level_count; ++l) {
+    const Eigen::Index first = grid_[l].info.first_row * f_count;
+    const bool hashed = !grid_[l].info.dense && !jacobian;
+    for (Eigen::Index n = 0; n < n_points; ++n) {
+      if (hashed && n + ahead < n_points) {
+        const Scalar* next = saved[0].data() + (l * n_points + n + ahead) * corners;
+        for (int v = 0; v < corners; ++v)
+          __builtin_prefetch(gradient + first + static_cast<Eigen::Index>(next[v]) * f_count, 1);
+      }
+      bool any = false;
+      for (int s = 0; s < streams; ++s)
+        for (int f = 0; f < f_count; ++f) {
+          const Scalar y = out_adjoint.data(s * n_points + n, input_columns() + l * f_count + f);
+          y_bar[s * f_count + f] = y;
+          any = any || y != 0;
+        }
+      if (!any) continue;
+      const Eigen::Index column = l * n_points + n;
+      const Scalar* rows = saved[0].data() + column * corners;
+      const Scalar* kappa = saved[1].data() + column * streams * corners;
+      Scalar* base = (jacobian ? &(*jacobian)(n, 0) : gradient) + first;
+      for (int v = 0; v < corners; ++v) {
+        Scalar* entry = base + static_cast<Eigen::Index>(rows[v]) * f_count;
+        for (int f = 0; f < f_count; ++f) {
+          Scalar sum = 0;
+          for (int s = 0; s < streams; ++s) sum += kappa[s * corners + v] * y_bar[s * f_count + f];
+          entry[f] += sum;
+        }
+      }
+    }
+  }
+}
+
+template <typename Scalar>
+void HashGridEncoding<Scalar>::backward(const StreamLayout& layout, const Scalar* params,
+                                        const Streams<Scalar>& in,
+                                        const autodiff::SavedTensors<Scalar>& saved,
+                                        Streams<Scalar>& out_adjoint, Scalar* gradient,
+                                        Streams<Scalar>* in_adjoint) const {
+  const Offsets o(layout, dim_);
+  if (gradient) table_adjoint(o, in, saved, out_adjoint, gradient, nullptr);
+  if (in_adjoint) input_adjoint(layout, params, in, out_adjoint, *in_adjoint);
+}
+
+template <typename Scalar>
+void HashGridEncoding<Scalar>::backward_per_point(const StreamLayout& layout, const Scalar* params,
+                                                  const Streams<Scalar>& in,
+                                                  const autodiff::SavedTensors<Scalar>& saved,
+                                                  Streams<Scalar>& out_adjoint,
+                                                  autodiff::JacobianRows<Scalar> jacobian,
+                                                  Streams<Scalar>* in_adjoint) const {
+  const Offsets o(layout, dim_);
+  for (Eigen::Index n = 0; n < in.points; ++n) jacobian.row(n).setZero();
+  table_adjoint(o, in, saved, out_adjoint, nullptr, &jacobian);
+  if (in_adjoint) input_adjoint(layout, params, in, out_adjoint, *in_adjoint);
+}
+
+// ∂L/∂(input streams). With ω_{s,v} = ȳ_s · T[row(v)] and, summed over corners,
+// g_s = Σ_v ω_{s,v} ∇W_v, H_s = Σ_v ω_{s,v} ∇²W_v, I_s = Σ_v ω_{s,v} ∇³W_v:
+//   x̄ = g_value + Σᵢ H_i a⁽ⁱ⁾ + Σ_q (H_q a^[q] + I_q : M_q)
+//   ā⁽ⁱ⁾ = g_i + Σ_q Σ_terms c H_q a⁽ʲ⁾      ā^[q] = g_q
+// and the Taylor streams through the adjoints of their series products.
+template <typename Scalar>
+void HashGridEncoding<Scalar>::input_adjoint(const StreamLayout& layout, const Scalar* params,
+                                             const Streams<Scalar>& in,
+                                             const Streams<Scalar>& out_adjoint,
+                                             Streams<Scalar>& in_adjoint) const {
+  const Offsets o(layout, dim_);
+  const Eigen::Index n_points = in.points;
+  const int d = dim_, corners = o.corners, streams = o.streams, f_count = features_;
+  const int plain = 1 + o.tangents + o.operators;  // streams before the Taylor ones
+  thread_local std::vector<Scalar> inputs, adjoint, omega, grad, hess, third;
+  gather(layout, o, in, inputs);
+  adjoint.assign(inputs.size(), Scalar(0));
+  omega.resize(static_cast<size_t>(streams * corners));
+  grad.resize(static_cast<size_t>(plain * d));
+  hess.resize(static_cast<size_t>(plain * d * d));
+  third.resize(static_cast<size_t>(std::max(o.operators, 1) * d * d * d));
+  Cell cell;
+  for (size_t l = 0; l < grid_.size(); ++l) {
+    const Level& level = grid_[l];
+    const Scalar* table = params + level.info.first_row * f_count;
+    for (Eigen::Index n = 0; n < n_points; ++n) {
+      const Scalar* point = inputs.data() + n * o.stride;
+      Scalar* bar = adjoint.data() + n * o.stride;
+      locate(level, point, cell);
+      for (int v = 0; v < corners; ++v) {
+        const Scalar* entry = table + static_cast<Eigen::Index>(cell.rows[v]) * f_count;
+        for (int s = 0; s < streams; ++s) {
+          Scalar sum = 0;
+          for (int f = 0; f < f_count; ++f)
+            sum += out_adjoint.data(s * n_points + n,
+                                    input_columns() + static_cast<Eigen::Index>(l) * f_count + f) *
+                   entry[f];
+          omega[s * corners + v] = sum;
+        }
+      }
+      std::fill(grad.begin(), grad.end(), Scalar(0));
+      std::fill(hess.begin(), hess.end(), Scalar(0));
+      std::fill(third.begin(), third.end(), Scalar(0));
+      for (int v = 0; v < corners; ++v) {
+        // ∂^α W_v = Π_j (factor j differentiated α_j times).
+        auto derivative = [&](const int* alpha) {
+          Scalar p = 1;
+          for (int j = 0; j < d; ++j) p *= factor(cell, v, j, alpha[j]);
+          return p;
+        };
+        for (int j = 0; j < d; ++j) {
+          int alpha[kMaxDim] = {0, 0, 0, 0};
+          ++alpha[j];
+          const Scalar g = derivative(alpha);
+          for (int s = 0; s < plain; ++s) grad[s * d + j] += omega[s * corners + v] * g;
+          if (plain == 1) continue;
+          for (int k = 0; k < d; ++k) {
+            ++alpha[k];
+            const Scalar h = derivative(alpha);
+            for (int s = 1; s < plain; ++s) hess[(s * d + j) * d + k] += omega[s * corners + v] * h;
+            for (int m = 0; m < d && o.operators > 0; ++m) {
+              ++alpha[m];
+              const Scalar t3 = derivative(alpha);
+              for (int q = 0; q < o.operators; ++q)
+                third[((q * d + j) * d + k) * d + m] += omega[layout.op(q) * corners + v] * t3;
+              --alpha[m];
+            }
+            --alpha[k];
+          }
+        }
+      }
+      // H v added to out.
+      auto add_hess = [&](int s, const Scalar* vec, Scalar scale, Scalar* out) {
+        for (int j = 0; j < d; ++j) {
+          Scalar sum = 0;
+          for (int k = 0; k < d; ++k) sum += hess[(s * d + j) * d + k] * vec[k];
+          out[j] += scale * sum;
+        }
+      };
+      for (int j = 0; j < d; ++j) bar[j] += grad[j];
+      for (int i = 0; i < o.tangents; ++i) {
+        const int s = layout.tangent(i);
+        for (int j = 0; j < d; ++j) bar[o.a + i * d + j] += grad[s * d + j];
+        add_hess(s, point + o.a + i * d, 1, bar);
+      }
+      for (int q = 0; q < o.operators; ++q) {
+        const int s = layout.op(q);
+        for (int j = 0; j < d; ++j) bar[o.b + q * d + j] += grad[s * d + j];
+        add_hess(s, point + o.b + q * d, 1, bar);
+        const Scalar* m = point + o.m + q * d * d;
+        for (int j = 0; j < d; ++j)
+          for (int k = 0; k < d; ++k)
+            for (int r = 0; r < d; ++r) bar[r] += m[j * d + k] * third[((q * d + j) * d + k) * d + r];
+        for (const autodiff::OperatorTerm& term : layout.terms(q)) {
+          const auto c = static_cast<Scalar>(term.coefficient);
+          add_hess(s, point + o.a + term.j * d, c, bar + o.a + term.i * d);
+          add_hess(s, point + o.a + term.i * d, c, bar + o.a + term.j * d);
+        }
+      }
+      if (o.dirs > 0) taylor_adjoint(layout, o, cell, point, omega.data(), bar);
+    }
+  }
+  in_adjoint.resize(n_points, in.count, d);
+  Matrix<Scalar>& a = in_adjoint.data;
+  for (Eigen::Index n = 0; n < n_points; ++n) {
+    const Scalar* bar = adjoint.data() + n * o.stride;
+    for (int j = 0; j < d; ++j) a(n, j) = bar[j];
+    for (int i = 0; i < o.tangents; ++i)
+      for (int j = 0; j < d; ++j) a(layout.tangent(i) * n_points + n, j) = bar[o.a + i * d + j];
+    for (int q = 0; q < o.operators; ++q)
+      for (int j = 0; j < d; ++j) a(layout.op(q) * n_points + n, j) = bar[o.b + q * d + j];
+    for (int dir = 0; dir < o.dirs; ++dir)
+      for (int k = 1; k <= o.order; ++k)
+        for (int j = 0; j < d; ++j)
+          a(layout.taylor(dir, k) * n_points + n, j) = bar[o.taylor_at(dir, k) + j];
+  }
+  if (include_input_) a += out_adjoint.data.leftCols(d);
+}
+
+// Reverse of taylor_weights: W̄_v = (0, ω_{(p,1),v}, …, ω_{(p,K),v}) → φ̄_j = Σ_v ± W̄_v ⋆
+// Π_{m≠j} (corner factor m) → t̄_j → x̄_j += s_j t̄_{j,0}, ā_{p,k,j} += s_j t̄_{j,k}.
+template <typename Scalar>
+void HashGridEncoding<Scalar>::taylor_adjoint(const StreamLayout& layout, const Offsets& o,
+                                              const Cell& cell, const Scalar* point,
+                                              const Scalar* omega, Scalar* point_adjoint) const {
+  const int d = dim_, corners = o.corners, order = o.order, n = order + 1;
+  thread_local SeriesScratch<Scalar> w;
+  thread_local std::vector<Scalar> phi_bar;
+  w.size(d, corners, n);
+  phi_bar.resize(static_cast<size_t>(d * n));
+  for (int dir = 0; dir < o.dirs; ++dir) {
+    for (int j = 0; j < d; ++j) series(o, cell, point, dir, j, w.t + j * n, w.t2 + j * n,
+                                       w.t3 + j * n, w.phi + j * n);
+    std::fill(phi_bar.begin(), phi_bar.end(), Scalar(0));
+    for (int v = 0; v < corners; ++v) {
+      Scalar* w_bar = w.bar;
+      w_bar[0] = 0;
+      bool any = false;
+      for (int k = 1; k <= order; ++k) {
+        w_bar[k] = omega[layout.taylor(dir, k) * corners + v];
+        any = any || w_bar[k] != 0;
+      }
+      if (!any) continue;
+      for (int j = 0; j < d; ++j) {
+        // Π_{m≠j} of corner v's factor series.
+        Scalar* others = w.products;
+        std::fill(others, others + n, Scalar(0));
+        others[0] = 1;
+        for (int m = 0; m < d; ++m) {
+          if (m == j) continue;
+          const Scalar* phi = w.phi + m * n;
+          if ((v >> m) & 1) {
+            std::copy(phi, phi + n, w.one_minus);
+          } else {
+            for (int k = 0; k < n; ++k) w.one_minus[k] = (k == 0 ? 1 : 0) - phi[k];
+          }
+          series_product(others, w.one_minus, w.tmp, n);
+          std::copy(w.tmp, w.tmp + n, others);
+        }
+        std::fill(w.bar2, w.bar2 + n, Scalar(0));
+        series_product_adjoint(w_bar, others, w.bar2, n);
+        const Scalar sign = ((v >> j) & 1) ? Scalar(1) : Scalar(-1);
+        for (int k = 0; k < n; ++k) phi_bar[j * n + k] += sign * w.bar2[k];
+      }
+    }
+    for (int j = 0; j < d; ++j) {
+      const Scalar* pb = phi_bar.data() + j * n;
+      // phi[0] is cell.phi[j][0] itself, whose derivative in t_j is φ'(t_j).
+      Scalar* t_bar = w.bar;
+      std::fill(t_bar, t_bar + n, Scalar(0));
+      if (!smoothstep_) {
+        std::copy(pb, pb + n, t_bar);
+      } else {
+        const Scalar* t = w.t + j * n;
+        const Scalar* t2 = w.t2 + j * n;
+        Scalar* t2_bar = w.bar2;
+        Scalar* t3_bar = w.tmp;
+        for (int k = 0; k < n; ++k) {
+          t2_bar[k] = 3 * pb[k];
+          t3_bar[k] = -2 * pb[k];
+        }
+        series_product_adjoint(t3_bar, t, t2_bar, n);  // t³ = t² · t
+        series_product_adjoint(t3_bar, t2, t_bar, n);
+        series_product_adjoint(t2_bar, t, t_bar, n);   // t² = t · t, both factors
+        series_product_adjoint(t2_bar, t, t_bar, n);
+      }
+      const Scalar s = cell.scale[j];
+      point_adjoint[j] += s * t_bar[0];
+      for (int k = 1; k <= order; ++k) point_adjoint[o.taylor_at(dir, k) + j] += s * t_bar[k];
+    }
+  }
+}
+
+template class HashGridEncoding<float>;
+template class HashGridEncoding<double>;
+
+}  // namespace nfield::fields
