@@ -14,6 +14,7 @@
 //     near: 0.1                  # optional: no sample closer to the camera than this
 //   render:
 //     samples: 64                # stratified samples per ray (jittered in training)
+//     importance: 0              # more samples per ray drawn from the first ones' weights
 //     density: softplus          # softplus | trunc_exp: σ from the raw density output s
 //     surface: 10                # density of the isosurface written after training
 //     occupancy:                 # optional: skip empty space (integrators/occupancy_grid.h)
@@ -32,6 +33,12 @@
 // with C from integrators/volume_rendering.h and σ = density(s), c = sigmoid(r, g, b). The
 // reverse pass runs the rendering adjoint and the output activations' derivatives back to
 // the samples' output streams. Training loss: mean over rays of ‖C − C_pixel‖².
+//
+// With `importance: k` (hierarchical sampling, NeRF Sec. 5.2, with one network): the
+// stratified samples are first rendered with the current field, without gradients, and k
+// more per ray are drawn from their weights (integrators::importance_samples); the field is
+// trained and rendered on both sets merged. Not with an occupancy grid, which places the
+// samples itself.
 //
 // With an occupancy grid, rays are marched at a fixed step through occupied cells only, in
 // training (each sample jittered inside its interval) and in rendering (midpoints); the grid
@@ -203,6 +210,9 @@ class Nerf final : public Problem {
 
     const io::ConfigNode render = context.root.child_or_empty("render");
     samples_ = render.has("samples") ? render.get_in_range("samples", 1, 4096) : 64;
+    importance_ = render.has("importance") ? render.get_in_range("importance", 0, 4096) : 0;
+    render.require("importance", importance_ == 0 || !render.has("occupancy"),
+                   "expected 0 with an occupancy grid (the grid places the samples)");
     density_.truncated_exp = render.get_choice("density", {"softplus", "trunc_exp"}, "softplus") == "trunc_exp";
     surface_ = render.get_or("surface", surface_);
     render.require("surface", surface_ > 0 && std::isfinite(surface_), "expected a density > 0");
@@ -413,6 +423,8 @@ class Nerf final : public Problem {
         batch->samples.t(i) += (static_cast<double>(engine() >> 11) * 0x1.0p-53 - 0.5) * batch->samples.delta(i);
     } else {
       batch->samples = integrators::stratified_samples(pixels.rays, {samples_, true}, engine);
+      if (importance_ > 0 && field_)
+        batch->samples = refined(field_, pixels.rays, batch->samples, pixels.background, false, engine);
     }
     if (background_ == Background::kRandom) {
       batch->background.resize(rays, 3);
@@ -444,15 +456,33 @@ class Nerf final : public Problem {
     return view;
   }
 
+  // The coarse samples and `importance_` more per ray drawn from their rendering weights with
+  // the field `values` (deterministic: at the inverse CDF's midpoints), merged in order.
+  RaySamples<double> refined(const FieldValues& values, const integrators::Rays<double>& rays,
+                             const RaySamples<double>& coarse, const Eigen::Vector3d& background,
+                             bool deterministic, std::mt19937_64& engine) const {
+    Eigen::MatrixXd x(coarse.size(), 6);
+    x << integrators::sample_points(rays, coarse), integrators::sample_directions(rays, coarse);
+    const Eigen::MatrixXd out = values(x);
+    const Eigen::VectorXd sigma = out.col(0).unaryExpr([this](double s) { return density_.value(s); });
+    const Eigen::MatrixXd rgb = out.middleCols(1, 3).unaryExpr([](double z) { return sigmoid(z); });
+    const auto weights = integrators::render<double>(coarse, sigma, rgb, background.transpose()).weights;
+    integrators::ImportanceOptions options;
+    options.samples_per_ray = importance_;
+    options.deterministic = deterministic;
+    options.include_coarse = true;
+    return integrators::importance_samples(rays, coarse, weights, options, engine);
+  }
+
   // Rays (clipped to the box here) marched through `grid` or sampled at the stratified
-  // midpoints, rendered on `background`.
+  // midpoints (refined by importance), rendered on `background`.
   View render_rays(const OutputContext& context, integrators::Rays<double> rays,
                    const Eigen::Vector3d& background, const integrators::OccupancyGrid* grid) const {
     integrators::clip_to_box(rays, box_, near_);
     std::mt19937_64 unused(0);
-    const RaySamples<double> samples =
-        grid ? grid->march(rays, occupancy_.march)
-             : integrators::stratified_samples(rays, {samples_, false}, unused);
+    RaySamples<double> samples = grid ? grid->march(rays, occupancy_.march)
+                                      : integrators::stratified_samples(rays, {samples_, false}, unused);
+    if (!grid && importance_ > 0) samples = refined(context.values, rays, samples, background, true, unused);
     Eigen::MatrixXd x(samples.size(), 6);
     x << integrators::sample_points(rays, samples), integrators::sample_directions(rays, samples);
     const Eigen::MatrixXd out = context.values(x);
@@ -562,6 +592,7 @@ class Nerf final : public Problem {
   Background background_ = Background::kWhite;
   std::shared_ptr<const integrators::MultiviewDataset> train_, test_;
   int samples_ = 64;
+  int importance_ = 0;
   double surface_ = 10;
   DensityActivation density_;
   OccupancySettings occupancy_;

@@ -92,6 +92,46 @@ TEST(Nerf, RayResidualAdjointMatchesCentralDifferences) {
   EXPECT_EQ(r_tail, r.bottomRows(7));
 }
 
+// Hierarchical sampling: each ray that crosses the box gets its stratified samples and
+// `importance` more where the current field puts its weight, in order along the ray.
+TEST(Nerf, ImportanceSamplesFollowTheFieldsWeights) {
+  std::string text = nerf_config(bunny_data(), "output: {dir: unused}\n");
+  text.replace(text.find("render: {samples: 16}"), 21, "render: {samples: 16, importance: 8}");
+  RunSetup setup = load_run(testutil::write_config("nerf", text), {});
+  // A field that is dense only in the slab |x| < 0.05: the fine samples gather there.
+  setup.problem->watch_field([](const Eigen::MatrixXd& x) {
+    Eigen::MatrixXd out = Eigen::MatrixXd::Zero(x.rows(), 4);
+    out.col(0) = (x.col(0).array().abs() < 0.05).select(Eigen::VectorXd::Constant(x.rows(), 5.0),
+                                                         Eigen::VectorXd::Constant(x.rows(), -20.0));
+    return out;
+  });
+  Random rng(7);
+  const TermPoints points = setup.problem->loss_terms()[0].sample(rng, 32);
+  int crossing = 0, in_slab = 0, fine_total = 0;
+  for (size_t r = 0; r + 1 < points.groups.size(); ++r) {
+    const Eigen::Index n = points.groups[r + 1] - points.groups[r];
+    ASSERT_TRUE(n == 0 || n == 24) << "ray " << r << " has " << n << " samples";
+    if (n == 0) continue;
+    ++crossing;
+    const Eigen::MatrixXd ray = points.x.middleRows(points.groups[r], n);
+    // In order along the ray: the distance from the first sample grows.
+    for (Eigen::Index i = 1; i < n; ++i)
+      EXPECT_GE((ray.row(i).head(3) - ray.row(0).head(3)).norm(),
+                (ray.row(i - 1).head(3) - ray.row(0).head(3)).norm() - 1e-12);
+    for (Eigen::Index i = 0; i < n; ++i) in_slab += std::abs(ray(i, 0)) < 0.05;
+    fine_total += 8;
+  }
+  ASSERT_GT(crossing, 16);
+  // 16 stratified samples put about 1.3 per ray in the slab; the 8 fine ones go there too
+  // where the ray meets it.
+  EXPECT_GT(in_slab, fine_total / 2) << crossing << " rays";
+  std::string with_grid = nerf_config(bunny_data());
+  with_grid.replace(with_grid.find("render: {samples: 16}"), 21,
+                    "render: {importance: 4, occupancy: {resolution: 8}}");
+  testutil::expect_located_error(testutil::write_config("nerf", with_grid),
+                                 {5, 22, "render.importance", "occupancy"});
+}
+
 TEST(Nerf, ShortTrainingLowersTheLossAndWritesTestViews) {
   const auto dir = testutil::scratch_dir("nerf");
   const auto config = testutil::write_config(
