@@ -97,6 +97,24 @@ struct DensityActivation {
 
 double sigmoid(double z) { return 1.0 / (1.0 + std::exp(-z)); }
 
+// The network's inputs [x, d] at every sample of every ray.
+Eigen::MatrixXd sample_inputs(const integrators::Rays<double>& rays, const RaySamples<double>& samples) {
+  Eigen::MatrixXd x(samples.size(), 6);
+  x << integrators::sample_points(rays, samples), integrators::sample_directions(rays, samples);
+  return x;
+}
+
+// σ and c of the samples from the field's raw outputs [s, r, g, b] (rows of `raw`).
+struct Shading {
+  Eigen::VectorXd sigma;
+  Eigen::MatrixXd rgb;
+};
+template <typename Raw>
+Shading shade(const Raw& raw, const DensityActivation& density) {
+  return {raw.col(0).unaryExpr([&density](double s) { return density.value(s); }),
+          raw.middleCols(1, 3).unaryExpr([](double z) { return sigmoid(z); })};
+}
+
 // What a drawn ray batch needs besides the sample positions: the samples' spacing, each
 // ray's pixel colour and background.
 struct RayBatch {
@@ -169,8 +187,9 @@ class RayColourResidual final : public Residual {
     b.samples_begin = all.offsets[b.k0] - first;
     const Eigen::Index n = b.samples.size();
     const auto value = out.stream(0).middleRows(b.samples_begin, n);
-    b.sigma = value.col(0).unaryExpr([this](double s) { return density_.value(s); });
-    b.rgb = value.middleCols(1, 3).unaryExpr([](double z) { return sigmoid(z); });
+    Shading shading = shade(value, density_);
+    b.sigma = std::move(shading.sigma);
+    b.rgb = std::move(shading.rgb);
     b.background = batch_->background.rows() == 1
                        ? batch_->background
                        : Eigen::MatrixXd(batch_->background.middleRows(b.k0, b.k1 - b.k0));
@@ -436,9 +455,7 @@ class Nerf final : public Problem {
       batch->target = pixels.rgb;
     }
     TermPoints points;
-    points.x.resize(batch->samples.size(), 6);
-    points.x << integrators::sample_points(pixels.rays, batch->samples),
-        integrators::sample_directions(pixels.rays, batch->samples);
+    points.x = sample_inputs(pixels.rays, batch->samples);
     points.groups = batch->samples.offsets;
     samples_per_step_ = batch->samples.size();
     points.context = std::move(batch);
@@ -461,12 +478,9 @@ class Nerf final : public Problem {
   RaySamples<double> refined(const FieldValues& values, const integrators::Rays<double>& rays,
                              const RaySamples<double>& coarse, const Eigen::Vector3d& background,
                              bool deterministic, std::mt19937_64& engine) const {
-    Eigen::MatrixXd x(coarse.size(), 6);
-    x << integrators::sample_points(rays, coarse), integrators::sample_directions(rays, coarse);
-    const Eigen::MatrixXd out = values(x);
-    const Eigen::VectorXd sigma = out.col(0).unaryExpr([this](double s) { return density_.value(s); });
-    const Eigen::MatrixXd rgb = out.middleCols(1, 3).unaryExpr([](double z) { return sigmoid(z); });
-    const auto weights = integrators::render<double>(coarse, sigma, rgb, background.transpose()).weights;
+    const Shading coarse_shading = shade(values(sample_inputs(rays, coarse)), density_);
+    const auto weights = integrators::render<double>(coarse, coarse_shading.sigma, coarse_shading.rgb,
+                                                     background.transpose()).weights;
     integrators::ImportanceOptions options;
     options.samples_per_ray = importance_;
     options.deterministic = deterministic;
@@ -483,12 +497,8 @@ class Nerf final : public Problem {
     RaySamples<double> samples = grid ? grid->march(rays, occupancy_.march)
                                       : integrators::stratified_samples(rays, {samples_, false}, unused);
     if (!grid && importance_ > 0) samples = refined(context.values, rays, samples, background, true, unused);
-    Eigen::MatrixXd x(samples.size(), 6);
-    x << integrators::sample_points(rays, samples), integrators::sample_directions(rays, samples);
-    const Eigen::MatrixXd out = context.values(x);
-    const Eigen::VectorXd sigma = out.col(0).unaryExpr([this](double s) { return density_.value(s); });
-    const Eigen::MatrixXd rgb = out.middleCols(1, 3).unaryExpr([](double z) { return sigmoid(z); });
-    const auto result = integrators::render<double>(samples, sigma, rgb, background.transpose());
+    const Shading shading = shade(context.values(sample_inputs(rays, samples)), density_);
+    const auto result = integrators::render<double>(samples, shading.sigma, shading.rgb, background.transpose());
     View view;
     view.rgb = result.color.cast<float>();
     view.opacity = result.opacity.cast<float>();
