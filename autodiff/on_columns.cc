@@ -23,6 +23,11 @@ OnColumns<Scalar>::OnColumns(std::unique_ptr<Module<Scalar>> inner, Eigen::Index
                              Eigen::Index width)
     : inner_(std::move(inner)), begin_(begin), width_(width) {
   if (!inner_) throw std::invalid_argument("OnColumns: no inner module");
+  // One per-thread scratch serves all OnColumns; a nested one would overwrite its caller's.
+  // (Nesting is never needed: columns of columns are columns of the outer input.)
+  if (dynamic_cast<const OnColumns*>(inner_.get()))
+    throw std::invalid_argument("OnColumns: the inner module is itself an OnColumns; give the outer "
+                                "one the combined column range instead");
   if (begin < 0 || begin + inner_->input_width() > width)
     throw std::invalid_argument("OnColumns: module '" + inner_->name() + "' reads columns [" +
                                 std::to_string(begin) + ", " +

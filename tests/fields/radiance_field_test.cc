@@ -160,6 +160,10 @@ TEST(OnColumns, RejectsColumnsOutsideItsInput) {
   EXPECT_THROW(autodiff::OnColumns<double>(std::make_unique<Dense<double>>(2, 3), 3, 4),
                std::invalid_argument);
   EXPECT_THROW(autodiff::OnColumns<double>(nullptr, 0, 4), std::invalid_argument);
+  EXPECT_THROW(autodiff::OnColumns<double>(std::make_unique<autodiff::OnColumns<double>>(
+                                               std::make_unique<Dense<double>>(2, 3), 0, 3),
+                                           0, 4),
+               std::invalid_argument);
   const autodiff::OnColumns<double> fits(std::make_unique<Dense<double>>(2, 3), 2, 4);
   EXPECT_EQ(fits.output_width(), 5);
 }
