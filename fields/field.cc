@@ -63,7 +63,7 @@ void FieldOptions::validate() const {
       reject("hidden[" + std::to_string(i) + "]", std::to_string(hidden[i]), "must be >= 1");
   if (!is_siren(*this)) {
     try {
-      make_activation<double>({activation, hidden_omega});
+      make_activation<double>({activation.empty() ? default_activation(type) : activation, hidden_omega});
     } catch (const UnknownNameError& e) {
       reject("activation", activation, e.what());
     }
@@ -80,6 +80,11 @@ void FieldOptions::validate() const {
 
 std::vector<std::string> field_type_names() { return field_types().names(); }
 
+std::string default_activation(const std::string& type) {
+  const std::string kind = Registry<int>::lower(type);
+  return kind == "mlp" ? "tanh" : kind == "nerf" ? "relu" : "sine";
+}
+
 template <typename Scalar>
 const autodiff::Module<Scalar>& parameter_owner(const autodiff::Module<Scalar>& module) {
   if (const auto* on = dynamic_cast<const autodiff::OnColumns<Scalar>*>(&module)) return on->inner();
@@ -89,6 +94,7 @@ const autodiff::Module<Scalar>& parameter_owner(const autodiff::Module<Scalar>& 
 template <typename Scalar>
 Field<Scalar>::Field(FieldOptions options, autodiff::SequentialOptions evaluation)
     : options_(std::move(options)), network_(evaluation) {
+  if (options_.activation.empty()) options_.activation = default_activation(options_.type);
   options_.validate();
   const int d = options_.input_dim;
   if (is_nerf(options_)) {

@@ -33,7 +33,8 @@ struct FieldOptions {
   int input_dim = 2;                  // ≥ 1 (nerf: 6)
   int output_dim = 1;                 // ≥ 1
   std::vector<int> hidden{256, 256, 256, 256};
-  std::string activation = "sine";    // mlp only: sine | tanh | softplus | relu | identity
+  std::string activation;             // mlp, nerf: sine | tanh | softplus | relu | identity;
+                                      // empty: the type's (default_activation)
   double first_omega = 30.0;          // siren: ω₀ of the first layer
   double hidden_omega = 30.0;         // siren: ω of later layers (mlp sine: its frequency)
   EncodingOptions encoding;
@@ -46,6 +47,10 @@ struct FieldOptions {
 };
 
 std::vector<std::string> field_type_names();
+
+// The activation a field type uses when none is given: sine (siren), tanh (mlp), relu (nerf).
+// The one place these defaults live.
+std::string default_activation(const std::string& type);
 
 // The module that holds a layer's parameters: itself, or the module inside an
 // autodiff::OnColumns (a Dense carried on some columns is still a Dense for initialization

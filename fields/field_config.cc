@@ -17,9 +17,9 @@ FieldOptions field_options_from_config(const io::ConfigNode& node, int input_dim
     node.require("hidden", !o.hidden.empty(), "expected a non-empty list of widths");
     for (int h : o.hidden) node.require("hidden", h >= 1 && h <= 16384, "expected widths in [1, 16384]");
   }
-  if (o.type == "mlp") o.activation = node.get_choice("activation", activation_names(), "tanh");
+  if (o.type == "mlp" || o.type == "nerf")
+    o.activation = node.get_choice("activation", activation_names(), default_activation(o.type));
   if (o.type == "nerf") {
-    o.activation = node.get_choice("activation", activation_names(), "relu");
     if (node.has("color_hidden")) {
       o.color_hidden = node.get<std::vector<int>>("color_hidden");
       for (int c : o.color_hidden)

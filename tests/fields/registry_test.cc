@@ -241,3 +241,25 @@ TEST(FieldOptions, AnyNumberOfInputs) {
 
 }  // namespace
 }  // namespace nfield::fields
+
+namespace nfield::fields {
+namespace {
+
+// One default per key: a field built without an activation and a config without the key
+// get the same one.
+TEST(FieldOptions, OneActivationDefaultPerType) {
+  EXPECT_EQ(default_activation("siren"), "sine");
+  EXPECT_EQ(default_activation("MLP"), "tanh");
+  EXPECT_EQ(default_activation("nerf"), "relu");
+  FieldOptions o;
+  o.type = "mlp";
+  o.hidden = {4};
+  EXPECT_EQ(Field<double>(o).options().activation, "tanh");
+  o.type = "nerf";
+  o.input_dim = 6;
+  o.output_dim = 4;
+  EXPECT_EQ(Field<double>(o).options().activation, "relu");
+}
+
+}  // namespace
+}  // namespace nfield::fields
