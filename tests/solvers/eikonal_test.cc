@@ -628,7 +628,7 @@ training: {batch: {interior: 64, source: 1}}
 }
 
 TEST(Eikonal, TinyFactoredRunLearnsTheCone) {
-  const std::filesystem::path out = std::filesystem::temp_directory_path() / "nfield_eikonal_test" / "tiny_out";
+  const std::filesystem::path out = testutil::scratch_dir("eikonal") / "tiny_out";
   std::filesystem::remove_all(out);
   RunSetup setup = load_run(write_config("tiny", R"(
 problem: eikonal
@@ -658,7 +658,7 @@ output: {grid: [32, 32], png: false}
 // The factored network gives τ, so the grid does not compare it; the per-stage rel_l2 must
 // still be the travel time's, after Adam and after LM, and the last one the final metric.
 TEST(Eikonal, FactoredStageErrorsAreTheTravelTimeError) {
-  const std::filesystem::path out = std::filesystem::temp_directory_path() / "nfield_eikonal_test" / "stages_out";
+  const std::filesystem::path out = testutil::scratch_dir("eikonal") / "stages_out";
   std::filesystem::remove_all(out);
   RunSetup setup = load_run(write_config("stages", R"(
 problem: eikonal
