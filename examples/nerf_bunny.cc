@@ -89,12 +89,8 @@ int main(int argc, char** argv) {
                                        const autodiff::Streams<float>& out,
                                        autodiff::Streams<float>& adjoint) {
     const auto [k0, k1] = autodiff::groups_in_block(samples.offsets, first, out.points);
-    integrators::RaySamples<double> block;
-    block.offsets.clear();
-    for (size_t k = k0; k <= k1; ++k) block.offsets.push_back(samples.offsets[k] - samples.offsets[k0]);
-    const Eigen::Index begin = samples.offsets[k0], n = samples.offsets[k1] - begin;
-    block.t = samples.t.segment(begin, n);
-    block.delta = samples.delta.segment(begin, n);
+    const auto block = integrators::ray_range(samples, static_cast<Eigen::Index>(k0), static_cast<Eigen::Index>(k1));
+    const Eigen::Index begin = samples.offsets[k0], n = block.size();
     const Eigen::MatrixXd raw = out.stream(0).middleRows(begin - first, n).cast<double>();
     const Eigen::VectorXd sigma = raw.col(0).unaryExpr(&softplus);
     const Eigen::MatrixXd rgb = raw.rightCols(3).unaryExpr(&sigmoid);

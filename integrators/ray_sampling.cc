@@ -17,6 +17,7 @@ void interval_lengths(const double* t, Eigen::Index n, double far, double* delta
   if (n > 0) delta[n - 1] = std::max(far - t[n - 1], 0.0);
 }
 
+
 template <typename Scalar>
 void check_samples_match(const Rays<Scalar>& rays, const RaySamples<Scalar>& samples,
                          const char* who) {
@@ -183,5 +184,20 @@ RaySamples<Scalar> importance_samples(const Rays<Scalar>& rays, const RaySamples
 NFIELD_INSTANTIATE(float)
 NFIELD_INSTANTIATE(double)
 #undef NFIELD_INSTANTIATE
+
+template <typename Scalar>
+RaySamples<Scalar> ray_range(const RaySamples<Scalar>& samples, Eigen::Index first_ray,
+                             Eigen::Index end_ray) {
+  RaySamples<Scalar> range;
+  const Eigen::Index begin = samples.offsets[first_ray], count = samples.offsets[end_ray] - begin;
+  range.offsets.resize(end_ray - first_ray + 1);
+  for (Eigen::Index r = first_ray; r <= end_ray; ++r) range.offsets[r - first_ray] = samples.offsets[r] - begin;
+  range.t = samples.t.segment(begin, count);
+  range.delta = samples.delta.segment(begin, count);
+  return range;
+}
+
+template RaySamples<float> ray_range(const RaySamples<float>&, Eigen::Index, Eigen::Index);
+template RaySamples<double> ray_range(const RaySamples<double>&, Eigen::Index, Eigen::Index);
 
 }  // namespace nfield::integrators

@@ -54,6 +54,12 @@ struct RaySamples {
 };
 
 // World positions o + t·d of all samples, N × 3 (the network's input).
+// Rays [first_ray, end_ray) of `samples` as samples of their own (offsets from their first
+// sample): what one block of a pass over ray groups renders.
+template <typename Scalar>
+RaySamples<Scalar> ray_range(const RaySamples<Scalar>& samples, Eigen::Index first_ray,
+                             Eigen::Index end_ray);
+
 template <typename Scalar>
 Matrix<Scalar> sample_points(const Rays<Scalar>& rays, const RaySamples<Scalar>& samples);
 // The unit direction of each sample's ray, N × 3 (the view direction of a radiance field).

@@ -23,12 +23,12 @@
 #include <limits>
 #include <type_traits>
 
+#include "autodiff/streams.h"
+
 namespace nfield::integrators {
 
-template <typename Scalar>
-using Matrix = Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>;
-template <typename Scalar>
-using Vector = Eigen::Matrix<Scalar, Eigen::Dynamic, 1>;
+using autodiff::Matrix;
+using autodiff::Vector;
 
 // Views of a network's outputs and adjoints (columns and blocks without a copy). Scalar sits in
 // a non-deduced context, so a call deduces it from the rays or samples and converts the Eigen

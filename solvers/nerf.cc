@@ -123,18 +123,6 @@ struct RayBatch {
   Eigen::MatrixXd background;  // 1 × 3, or R × 3
 };
 
-// The rays of groups [k0, k1) as samples of their own (offsets from the block's first point).
-RaySamples<double> block_samples(const RaySamples<double>& all, size_t k0, size_t k1,
-                                 Eigen::Index first) {
-  RaySamples<double> local;
-  local.offsets.resize(k1 - k0 + 1);
-  for (size_t k = k0; k <= k1; ++k) local.offsets[k - k0] = all.offsets[k] - first;
-  const Eigen::Index begin = all.offsets[k0], count = all.offsets[k1] - begin;
-  local.t = all.t.segment(begin, count);
-  local.delta = all.delta.segment(begin, count);
-  return local;
-}
-
 class RayColourResidual final : public Residual {
  public:
   RayColourResidual(std::shared_ptr<const RayBatch> batch, DensityActivation density)
@@ -183,7 +171,7 @@ class RayColourResidual final : public Residual {
     const RaySamples<double>& all = batch_->samples;
     Block b;
     std::tie(b.k0, b.k1) = autodiff::groups_in_block(all.offsets, first, out.points);
-    b.samples = block_samples(all, b.k0, b.k1, all.offsets[b.k0]);
+    b.samples = integrators::ray_range(all, static_cast<Eigen::Index>(b.k0), static_cast<Eigen::Index>(b.k1));
     b.samples_begin = all.offsets[b.k0] - first;
     const Eigen::Index n = b.samples.size();
     const auto value = out.stream(0).middleRows(b.samples_begin, n);

@@ -51,6 +51,20 @@ TEST(StratifiedSamples, OneJitteredSampleInEachBin) {
   EXPECT_NE(stratified_samples(rays, {.samples_per_ray = 8}, other).t, s.t);
 }
 
+// A range of rays keeps their samples, with offsets from the range's first sample.
+TEST(RayRange, RaysOfOneBlockAsSamplesOfTheirOwn) {
+  std::mt19937_64 rng(3);
+  const auto all = stratified_samples(three_rays(), {.samples_per_ray = 5, .jitter = true}, rng);
+  const auto tail = ray_range(all, 1, 3);
+  ASSERT_EQ(tail.rays(), 2);
+  EXPECT_EQ(tail.offsets.front(), 0);
+  EXPECT_EQ(tail.size(), all.offsets[3] - all.offsets[1]);
+  EXPECT_EQ(tail.t, all.t.segment(all.offsets[1], tail.size()));
+  EXPECT_EQ(tail.delta, all.delta.segment(all.offsets[1], tail.size()));
+  for (Eigen::Index r = 0; r < 2; ++r) EXPECT_EQ(tail.count(r), all.count(r + 1));
+  EXPECT_NO_THROW(tail.validate());
+}
+
 TEST(StratifiedSamples, MidpointsForEvaluation) {
   const auto rays = three_rays();
   std::mt19937_64 rng(1);
