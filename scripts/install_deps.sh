@@ -10,7 +10,7 @@ packages=(
   libeigen3-dev libceres-dev libvtk9-dev libhdf5-dev libyaml-cpp-dev
   libgtest-dev libgmock-dev libbenchmark-dev libmuparser-dev libomp-dev libcli11-dev nlohmann-json3-dev
   python3-h5py
-  libboost-dev
+  libboost-dev libsndfile1-dev
 )
 if [[ "${NFIELD_WITH_TORCH:-0}" == 1 ]]; then
   packages+=(python3 python3-torch python3-numpy python3-pil libopenblas0-openmp)

@@ -25,6 +25,9 @@ struct OutputContext {
   // Values of the trained field at points (n × output_dim), in double.
   std::function<Eigen::MatrixXd(const Eigen::MatrixXd&)> values;
   std::vector<int> grid;  // output.grid
+  // Streams of the trained field at points (n × field_input_dim), in double, for outputs
+  // that read derivatives (an integral field's fitted integrand).
+  std::function<autodiff::Streams<double>(const autodiff::StreamLayout&, const Eigen::MatrixXd&)> streams;
 };
 
 // What `nfield render` asks of a problem whose field renders images: the cameras of a
