@@ -114,6 +114,7 @@ AdaptiveQuadratureResult adaptive_gauss_kronrod(const PointFunction& f, const Ei
       }
     }
     open.swap(next);
+    if (options.on_round) options.on_round(result, static_cast<long>(open.size()));
   }
   return result;
 }

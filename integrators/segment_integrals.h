@@ -38,6 +38,9 @@ struct AdaptiveQuadratureOptions {
   // Bisections of a segment at most; a piece this deep is accepted as it is (and counted in
   // `unconverged`). 1 … 60.
   int max_depth = 30;
+  // Called after every round with the result so far and the pieces still open (progress
+  // lines for long integrations); may be empty.
+  std::function<void(const struct AdaptiveQuadratureResult& so_far, long open_pieces)> on_round;
 
   // Throws std::invalid_argument naming the field, its value and the rule.
   void validate() const;

@@ -427,3 +427,31 @@ INSTANTIATE_TEST_SUITE_P(Precisions, OutputsTest, ::testing::Values("double", "f
 
 }  // namespace
 }  // namespace nfield::apps::testing
+
+// nfield run on an audio integrand in a tiny setting: the outputs an AutoInt run promises are
+// written (the curves, the integral and timing metrics), whatever the figures.
+TEST(AutoIntRunTest, WritesCurvesAndIntegralMetrics) {
+  const auto dir = scratch_dir();
+  write_text(dir / "audio.yaml", "problem: autoint_1d\n"
+                                 "domain: {lower: [-1], upper: [1]}\n"
+                                 "equation: {audio: " NFIELD_SOURCE_DIR "/data/audio/counting_espeak.wav, "
+                                 "audio_seconds: [0, 0.01], intervals: 50}\n"
+                                 "field: {type: siren, hidden: [16], first_omega: 100}\n"
+                                 "training: {batch: {interior: 64}, stages: [{optimizer: adam, steps: 20}]}\n"
+                                 "output: {dir: out, grid: [16]}\n");
+  const Outcome o = run_nfield({"run", "audio.yaml"}, dir, dir / "capture");
+  ASSERT_EQ(o.code, 0) << describe(o);
+  EXPECT_NE(o.out.find("integrals: rel. L2 error"), std::string::npos) << o.out;
+  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "integrand.png"));
+  const std::string csv = read_text(dir / "out" / "integrand.csv");
+  EXPECT_EQ(csv.substr(0, csv.find('\n')), "x,f,fitted_integrand,antiderivative");
+  const nlohmann::json metrics = nlohmann::json::parse(read_text(dir / "out" / "metrics.json"));
+  EXPECT_EQ(metrics["timed_intervals"].get<double>(), 50);
+  for (const char* key : {"integral_rel_l2", "integrand_rel_l2", "autoint_us_per_integral",
+                          "quadrature_us_per_integral", "quadrature_evaluations_per_integral",
+                          "autoint_speedup_over_quadrature"}) {
+    ASSERT_TRUE(metrics.contains(key)) << key;
+    EXPECT_GT(metrics[key].get<double>(), 0) << key;
+  }
+  EXPECT_GE(metrics["quadrature_evaluations_per_integral"].get<double>(), 15);
+}
