@@ -155,10 +155,10 @@ class AdamOptimizer final : public OptimizerOf<AdamOptimizer, AdamStageOptions> 
     AdamStageOptions& o = options;
     o.lr = s.get_or("lr", o.lr);
     s.require("lr", o.lr > 0, "expected a learning rate > 0");
-    o.schedule = s.get_choice("schedule", {"constant", "cosine", "exponential"}, "constant");
+    o.schedule = s.get_choice("schedule", {"constant", "cosine", "exponential"}, o.schedule);
     o.lr_final = s.get_or("lr_final", std::min(o.lr_final, o.lr));
     s.require("lr_final", o.lr_final > 0, "expected a learning rate > 0");
-    o.seconds = s.get_or("seconds", 0.0);
+    o.seconds = s.get_or("seconds", o.seconds);
     s.require("seconds", o.seconds >= 0 && std::isfinite(o.seconds),
               "expected a number of seconds >= 0 (0: no time limit)");
     o.validate();
@@ -242,8 +242,8 @@ class AdamOptimizer final : public OptimizerOf<AdamOptimizer, AdamStageOptions> 
 class LbfgsOptimizer final : public OptimizerOf<LbfgsOptimizer, LbfgsStageOptions> {
  public:
   void read(const io::ConfigNode& s) override {
-    options.memory = in_range_or(s, "memory", 1, 1000, 20);
-    options.resample_every = in_range_or(s, "resample_every", 0, 1 << 30, 0);
+    options.memory = in_range_or(s, "memory", 1, 1000, options.memory);
+    options.resample_every = in_range_or(s, "resample_every", 0, 1 << 30, options.resample_every);
     options.validate();
   }
   void write(YAML::Node& y) const override {
@@ -306,9 +306,9 @@ class LmOptimizer final : public OptimizerOf<LmOptimizer, LmStageOptions> {
  public:
   void read(const io::ConfigNode& s) override {
     options.linear_solver =
-        s.get_choice("linear_solver", {"dense_qr", "dense_normal_cholesky"}, "dense_qr");
-    options.initial_radius = in_range_or(s, "initial_radius", 1e-12, 1e16, 1e4);
-    options.resample_every = in_range_or(s, "resample_every", 0, 1 << 30, 0);
+        s.get_choice("linear_solver", {"dense_qr", "dense_normal_cholesky"}, options.linear_solver);
+    options.initial_radius = in_range_or(s, "initial_radius", 1e-12, 1e16, options.initial_radius);
+    options.resample_every = in_range_or(s, "resample_every", 0, 1 << 30, options.resample_every);
     options.validate();
   }
   void write(YAML::Node& y) const override {

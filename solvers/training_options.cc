@@ -21,19 +21,19 @@ int TrainingOptions::total_steps() const {
 
 TrainingOptions TrainingOptions::from_config(const io::ConfigNode& node) {
   TrainingOptions o;
-  o.seed = static_cast<std::uint64_t>((node.has("seed") ? node.get_nonnegative<std::int64_t>("seed") : 0));
-  o.precision = node.get_choice("precision", {"float", "double"}, "float");
-  o.threads = in_range_or(node, "threads", 0, 1024, 0);
-  o.block = in_range_or<long>(node, "block", 1, 1 << 20, 128);
+  if (node.has("seed")) o.seed = static_cast<std::uint64_t>(node.get_nonnegative<std::int64_t>("seed"));
+  o.precision = node.get_choice("precision", {"float", "double"}, o.precision);
+  o.threads = in_range_or(node, "threads", 0, 1024, o.threads);
+  o.block = in_range_or<long>(node, "block", 1, 1 << 20, o.block);
   if (node.has("batch")) {
     const io::ConfigNode batch = node.child("batch");
     batch.require(batch.is_map(), "expected a mapping such as {interior: 4096, boundary: 1024}");
     for (const std::string& key : batch.keys()) o.batch[key] = batch.get_in_range<long>(key, 1, 1L << 26);
   }
-  o.resample_every = in_range_or(node, "resample_every", 1, 1 << 30, 1);
-  o.log_every = in_range_or(node, "log_every", 1, 1 << 30, 100);
-  o.checkpoint_every = in_range_or(node, "checkpoint_every", 0, 1 << 30, 0);
-  o.sampler = node.get_choice("sampler", sampler_names(), "uniform");
+  o.resample_every = in_range_or(node, "resample_every", 1, 1 << 30, o.resample_every);
+  o.log_every = in_range_or(node, "log_every", 1, 1 << 30, o.log_every);
+  o.checkpoint_every = in_range_or(node, "checkpoint_every", 0, 1 << 30, o.checkpoint_every);
+  o.sampler = node.get_choice("sampler", sampler_names(), o.sampler);
   o.adaptive = adaptive_from_config(node);
   o.balance = balance_from_config(node);
   o.causal = causal_from_config(node);
