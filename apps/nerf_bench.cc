@@ -18,6 +18,7 @@
 #include "integrators/scene_box.h"
 #include "integrators/volume_rendering.h"
 #include "solvers/adam.h"
+#include "solvers/optimizers.h"
 #include "solvers/run.h"
 #include "solvers/sampler.h"
 
@@ -143,7 +144,8 @@ void run_nerf_bench(const NerfBenchOptions& options) {
     if (term.batch_key == "rays") rays += batch.back();
   }
   const solvers::StageOptions& stage = setup.training.stages.front();
-  solvers::Adam<float> adam(field.parameter_count(), {stage.lr});
+  const auto& schedule = stage.options<solvers::AdamStageOptions>();
+  solvers::Adam<float> adam(field.parameter_count(), {schedule.lr});
   solvers::Random rng(setup.training.seed);
   std::vector<solvers::TermPoints> points(terms.size());
   std::vector<autodiff::Matrix<float>> x(terms.size());
@@ -182,7 +184,7 @@ void run_nerf_bench(const NerfBenchOptions& options) {
                                gradient.data());
     }
     const auto passed = Clock::now();
-    adam.step(field.parameters().data(), gradient.data(), stage.learning_rate(s));
+    adam.step(field.parameters().data(), gradient.data(), schedule.learning_rate(s, stage.steps));
     const auto end = Clock::now();
     if (s < options.warmup) continue;
     const auto between = [](Clock::time_point a, Clock::time_point b) {

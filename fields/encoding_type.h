@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 //
 // One registered encoding type: everything the program does that depends on the type of
-// `field.encoding`. The registry (encoding_type(), fields/encodings.cc) maps each name,
+// `field.encoding`. The registry (encoding_type(), fields/encoding_types.cc) maps each name,
 // case-insensitively, to one of these; adding an encoding is its own files plus one
 // registration line there. An unknown name is an UnknownNameError listing the valid names.
 #pragma once

@@ -1,22 +1,10 @@
 // SPDX-License-Identifier: MIT
 //
-// A field f_θ: R^d → R^m, a coordinate network with one flat parameter vector θ.
-//
-//   siren  x → γ(x) → [Dense → sin(ω·)] × H → Dense              (Sitzmann et al. 2020)
-//          first layer ω = first_omega, later ones hidden_omega; weights of the first layer
-//          U(−1/n, 1/n), later U(−√(6/n)/ω, √(6/n)/ω), n the fan-in; biases U(−1/√n, 1/√n).
-//   mlp    x → γ(x) → [Dense → σ] × H → Dense, σ = `activation`; He-uniform weights for relu,
-//          Xavier-uniform otherwise, zero biases.
-//   nerf   a radiance field: [x, d] → [density, r, g, b] (raw), d entering after the trunk
-//          (fields/radiance_network.h); `hidden` is the trunk, `color_hidden` the colour
-//          layers, `encoding` encodes x; relu by default; weights initialized as mlp.
+// A field f_θ: R^d → R^m, a coordinate network with one flat parameter vector θ, built by its
+// field type (fields/field_type.h: siren, mlp, nerf, and types registered from outside).
 //
 // Encodings with parameters (hash_grid) draw their own initialization (Module::initialize),
 // from the same engine, before the dense layers.
-//
-// `hidden` lists the H hidden widths: the SIREN reference network of the paper, d → 256,
-// three 256 → 256 layers and 256 → 1, is hidden = [256, 256, 256, 256].
-// Complex-valued fields use output_dim = 2 (real, imaginary).
 #pragma once
 
 #include <cstdint>
@@ -25,32 +13,9 @@
 
 #include "autodiff/sequential.h"
 #include "fields/encodings.h"
+#include "fields/field_options.h"
 
 namespace nfield::fields {
-
-struct FieldOptions {
-  std::string type = "siren";         // siren | mlp | nerf
-  int input_dim = 2;                  // ≥ 1 (nerf: 6)
-  int output_dim = 1;                 // ≥ 1
-  std::vector<int> hidden{256, 256, 256, 256};
-  std::string activation;             // mlp, nerf: sine | tanh | softplus | relu | identity;
-                                      // empty: the type's (default_activation)
-  double first_omega = 30.0;          // siren: ω₀ of the first layer
-  double hidden_omega = 30.0;         // siren: ω of later layers (mlp sine: its frequency)
-  EncodingOptions encoding;
-  std::vector<int> color_hidden{64};  // nerf: widths of the colour layers
-  int direction_frequencies = 4;      // nerf: octaves of the view direction's encoding
-  std::uint64_t seed = 0;             // initial weights
-
-  // Throws std::invalid_argument naming the field, its value and the rule.
-  void validate() const;
-};
-
-std::vector<std::string> field_type_names();
-
-// The activation a field type uses when none is given: sine (siren), tanh (mlp), relu (nerf).
-// The one place these defaults live.
-std::string default_activation(const std::string& type);
 
 // The module that holds a layer's parameters: itself, or the module inside an
 // autodiff::OnColumns (a Dense carried on some columns is still a Dense for initialization

@@ -3,6 +3,7 @@
 
 #include "fields/activations.h"
 #include "fields/encoding_type.h"
+#include "fields/field_type.h"
 
 namespace nfield::fields {
 
@@ -11,23 +12,16 @@ FieldOptions field_options_from_config(const io::ConfigNode& node, int input_dim
   FieldOptions o;
   o.input_dim = input_dim;
   o.output_dim = output_dim;
-  o.type = node.get_choice("type", field_type_names(), "siren");
+  o.type = node.get_choice("type", field_type_names(), FieldOptions().type);
+  const FieldType& type = field_type(o.type);
   if (node.has("hidden")) {
     o.hidden = node.get<std::vector<int>>("hidden");
     node.require("hidden", !o.hidden.empty(), "expected a non-empty list of widths");
     for (int h : o.hidden) node.require("hidden", h >= 1 && h <= 16384, "expected widths in [1, 16384]");
   }
-  if (o.type == "mlp" || o.type == "nerf")
-    o.activation = node.get_choice("activation", activation_names(), default_activation(o.type));
-  if (o.type == "nerf") {
-    if (node.has("color_hidden")) {
-      o.color_hidden = node.get<std::vector<int>>("color_hidden");
-      for (int c : o.color_hidden)
-        node.require("color_hidden", c >= 1 && c <= 16384, "expected widths in [1, 16384]");
-    }
-    if (node.has("direction_frequencies"))
-      o.direction_frequencies = node.get_in_range("direction_frequencies", 1, 16);
-  }
+  if (type.has_activation())
+    o.activation = node.get_choice("activation", activation_names(), type.default_activation());
+  type.read(node, o);
   o.first_omega = node.get_or("first_omega", o.first_omega);
   node.require("first_omega", o.first_omega > 0, "expected a number > 0");
   o.hidden_omega = node.get_or("hidden_omega", o.hidden_omega);
@@ -35,7 +29,7 @@ FieldOptions field_options_from_config(const io::ConfigNode& node, int input_dim
   o.seed = node.has("seed") ? static_cast<std::uint64_t>(node.get_nonnegative<std::int64_t>("seed")) : seed;
   if (node.has("encoding")) {
     const io::ConfigNode e = node.child("encoding");
-    o.encoding.type = e.get_choice("type", encoding_names(), "identity");
+    o.encoding.type = e.get_choice("type", encoding_names(), o.encoding.type);
     encoding_type(o.encoding.type).read(e, {input_dim, o.seed, std::move(input_names)}, o.encoding);
     e.reject_unknown_keys();
   }
@@ -50,13 +44,11 @@ FieldOptions field_options_from_config(const io::ConfigNode& node, int input_dim
 
 YAML::Node to_yaml(const FieldOptions& o, std::vector<std::string> input_names) {
   YAML::Node n;
+  const FieldType& type = field_type(o.type);
   n["type"] = o.type;
   n["hidden"] = o.hidden;
-  if (o.type == "mlp" || o.type == "nerf") n["activation"] = o.activation;
-  if (o.type == "nerf") {
-    n["color_hidden"] = o.color_hidden;
-    n["direction_frequencies"] = o.direction_frequencies;
-  }
+  if (type.has_activation()) n["activation"] = o.activation;
+  type.write(o, n);
   n["first_omega"] = o.first_omega;
   n["hidden_omega"] = o.hidden_omega;
   n["seed"] = o.seed;

@@ -6,7 +6,7 @@
 
 #include "fields/dense.h"
 #include "fields/encoding_type.h"
-#include "io/registry.h"
+#include "fields/field_type.h"
 
 namespace nfield::fields {
 namespace {
@@ -44,11 +44,7 @@ void save_field(io::H5Writer& file, const Field<Scalar>& field, const std::strin
     file.write_attribute(group, "encoding_lower", std::span<const double>(o.encoding.lower));
     file.write_attribute(group, "encoding_upper", std::span<const double>(o.encoding.upper));
   }
-  if (Registry<int>::lower(o.type) == "nerf") {
-    std::vector<std::int64_t> color(o.color_hidden.begin(), o.color_hidden.end());
-    file.write_attribute(group, "color_hidden", std::span<const std::int64_t>(color));
-    file.write_attribute(group, "direction_frequencies", o.direction_frequencies);
-  }
+  field_type(o.type).save(file, group, o);
   encoding_type(o.encoding.type).save(file, group, o.encoding);
   if (field.encoding_matrix().rows() > 0) file.write(group + "/encoding", field.encoding_matrix());
   const auto& modules = field.network().modules();
@@ -91,13 +87,7 @@ FieldOptions load_field_options(const io::H5Reader& file, const std::string& gro
     o.encoding.upper = file.read_attribute<std::vector<double>>(group, "encoding_upper");
   }
   encoding_type(o.encoding.type).load(file, group, o.encoding);
-  if (file.has_attribute(group, "color_hidden")) {
-    const auto color = file.read_attribute<std::vector<std::int64_t>>(group, "color_hidden");
-    o.color_hidden.assign(color.begin(), color.end());
-  }
-  if (file.has_attribute(group, "direction_frequencies"))
-    o.direction_frequencies =
-        static_cast<int>(file.read_attribute<std::int64_t>(group, "direction_frequencies"));
+  field_type(o.type).load(file, group, o);
   return o;
 }
 

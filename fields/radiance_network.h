@@ -18,7 +18,7 @@
 #pragma once
 
 #include "autodiff/sequential.h"
-#include "fields/field.h"
+#include "fields/field_options.h"
 
 namespace nfield::fields {
 

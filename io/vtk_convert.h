@@ -7,7 +7,7 @@
 #include <Eigen/Core>
 
 #include "io/point_arrays.h"
-#include "io/vtk_polydata.h"
+#include "io/poly_data.h"
 
 class vtkCellArray;
 class vtkDataArray;

@@ -5,17 +5,10 @@
 #include <Eigen/Core>
 
 #include "io/point_arrays.h"
+#include "io/poly_data.h"
 #include "io/triangle_mesh.h"
 
 namespace nfield::io {
-
-// What a .vtp file holds here: points, line segments, triangles and named point arrays.
-struct PolyData {
-  Eigen::MatrixXd points;                           // n×3 (n×2 is accepted for writing: z = 0)
-  Eigen::Matrix<int, Eigen::Dynamic, 2> lines;      // point indices of each segment
-  Eigen::Matrix<int, Eigen::Dynamic, 3> triangles;  // point indices of each triangle
-  PointArrays arrays;                               // each with one row per point
-};
 
 // Writes a VTK XML polydata file (.vtp: appended raw binary, zlib compressed) atomically (see
 // io/atomic_write.h). With neither lines nor triangles, every point is also written as a

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "io/config.h"
+#include "solvers/condition_values.h"
 #include "solvers/residual.h"
 
 namespace nfield::solvers {
@@ -29,17 +30,5 @@ class Ansatz;
 std::vector<LossTerm> condition_terms(const io::ConfigNode& conditions, const Domain& domain,
                                       int output_dim,
                                       std::shared_ptr<const Ansatz>* ansatz = nullptr);
-
-// Per-channel expressions from a `value` entry (one string, or a list of output_dim).
-std::vector<io::Expression> channel_expressions(const io::ConfigNode& node, std::string_view key,
-                                                const Domain& domain, int output_dim);
-
-// The faces a condition item's `on` names (a face, a list of faces, or boundary); errors
-// name the item's `on` and list the valid faces.
-std::vector<Face> condition_faces(const io::ConfigNode& item, const Domain& domain);
-
-// Evaluates per-channel expressions at points: n × channels.
-Eigen::MatrixXd evaluate_channels(const std::vector<io::Expression>& expressions,
-                                  const Eigen::MatrixXd& points);
 
 }  // namespace nfield::solvers

@@ -11,8 +11,8 @@
 #include <string>
 
 #include "autodiff/streams.h"
+#include "solvers/output_options.h"
 #include "solvers/problem.h"
-#include "solvers/run.h"
 
 namespace nfield::solvers {
 

@@ -7,7 +7,7 @@
 #include <stdexcept>
 
 #include "io/registry.h"
-#include "solvers/conditions.h"
+#include "solvers/condition_values.h"
 
 namespace nfield::solvers {
 

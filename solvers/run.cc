@@ -230,29 +230,39 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
   return finished ? 0 : 130;
 }
 
-// An LM stage's dense Jacobian has to fit Ceres' int-indexed matrices. Checked here so that
-// an oversized one is reported at load time, not after the stages before it have run (the
-// trainer checks again when the stage starts).
-void check_lm_jacobian(const RunSetup& s) {
-  const auto& stages = s.training.stages;
-  const auto lm = std::find_if(stages.begin(), stages.end(),
-                               [](const StageOptions& stage) { return stage.optimizer == "lm"; });
-  if (lm == stages.end()) return;
-  const std::vector<LossTerm> terms = s.problem->loss_terms();
-  Random rng(0);
-  double rows = 0;
-  for (size_t k = 0; k < terms.size(); ++k) {
-    double points = static_cast<double>(s.training.batch.at(terms[k].batch_key));
-    if (s.training.adaptive.enabled && static_cast<int>(k) == s.problem->residual_term())
-      points += static_cast<double>(s.training.adaptive.max_points);
-    rows += points * terms[k].residual(terms[k].sample(rng, 1))->components();
+// Stages whose optimizer cannot take the problem's size (an lm stage's dense Jacobian has
+// to fit Ceres' int-indexed matrices) are reported at load time, not after the stages before
+// them have run (the optimizer checks again when its stage starts).
+void check_stage_sizes(const RunSetup& s) {
+  std::optional<double> rows;
+  std::optional<Eigen::Index> parameters;
+  const ProblemSize size{
+      .residual_rows =
+          [&] {
+            // The batch of each term, plus the RAR set for the PDE term.
+            if (!rows) {
+              const std::vector<LossTerm> terms = s.problem->loss_terms();
+              Random rng(0);
+              rows = 0;
+              for (size_t k = 0; k < terms.size(); ++k) {
+                double points = static_cast<double>(s.training.batch.at(terms[k].batch_key));
+                if (s.training.adaptive.enabled && static_cast<int>(k) == s.problem->residual_term())
+                  points += static_cast<double>(s.training.adaptive.max_points);
+                *rows += points * terms[k].residual(terms[k].sample(rng, 1))->components();
+              }
+            }
+            return *rows;
+          },
+      .parameters =
+          [&] {
+            if (!parameters) parameters = fields::Field<double>(s.field).parameter_count();
+            return *parameters;
+          }};
+  for (std::size_t i = 0; i < s.training.stages.size(); ++i) {
+    const std::string refusal = s.training.stages[i].settings->refuse(size);
+    if (!refusal.empty())
+      throw s.root.child("training").child("stages").at(i).error("optimizer", refusal);
   }
-  const std::string too_large =
-      lm_jacobian_too_large(rows, fields::Field<double>(s.field).parameter_count());
-  if (too_large.empty()) return;
-  const auto index = static_cast<std::size_t>(lm - stages.begin());
-  throw s.root.child("training").child("stages").at(index).error(
-      "optimizer", "an lm stage here would need a Jacobian of " + too_large);
 }
 
 }  // namespace
@@ -307,7 +317,7 @@ RunSetup load_run(const std::filesystem::path& config, const std::vector<std::st
   });
   check_against_problem(s.root.child_or_empty("training"), s.training.adaptive, s.training.balance,
                         s.training.causal, *s.problem);
-  check_lm_jacobian(s);
+  check_stage_sizes(s);
   s.root.child_or_empty("training").reject_unknown_keys();
   s.root.reject_unknown_keys_recursive();
   s.resolved = YAML::Clone(s.root.yaml());

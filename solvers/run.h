@@ -11,12 +11,7 @@
 //   metrics.json     problem, steps, wall_s, step_ms_median, losses, rel_l2, max_abs_err, …
 //                    stages: [{optimizer, steps, loss, rel_l2, wall_s}] after each stage
 //
-// The `output:` section:
-//   output:
-//     dir: out/NAME        # default: out/ + the config file's stem
-//     grid: [128, 128]     # points per space axis (default 256 in 1D, 128 in 2D, 48 in 3D)
-//     frames: 11           # time-dependent problems: frames over [t0, t1]
-//     png: true
+// The `output:` section: solvers/output_options.h.
 #pragma once
 
 #include <filesystem>
@@ -25,17 +20,11 @@
 #include <vector>
 
 #include "fields/field.h"
+#include "solvers/output_options.h"
 #include "solvers/problem.h"
 #include "solvers/training_options.h"
 
 namespace nfield::solvers {
-
-struct OutputOptions {
-  std::filesystem::path dir;
-  std::vector<int> grid;
-  int frames = 11;
-  bool png = true;
-};
 
 struct RunSetup {
   std::filesystem::path config_path;

@@ -1,19 +1,12 @@
 // SPDX-License-Identifier: MIT
 #include "solvers/trainer.h"
 
-#include <ceres/cost_function.h>
-#include <ceres/gradient_problem.h>
-#include <ceres/gradient_problem_solver.h>
-#include <ceres/problem.h>
-#include <ceres/solver.h>
-
 #include <chrono>
 #include <cmath>
 #include <algorithm>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
-#include <type_traits>
 
 #include "solvers/hard_constraints.h"
 
@@ -147,33 +140,25 @@ void Trainer<Scalar>::begin_stage() {
   }
 }
 
-std::string lm_jacobian_too_large(double rows, Eigen::Index parameters) {
-  if (rows * static_cast<double>(parameters) <= std::numeric_limits<int>::max()) return "";
-  return std::to_string(static_cast<long long>(rows)) + " residuals x " +
-         std::to_string(parameters) + " parameters, more than the 2^31 - 1 entries Ceres' " +
-         "dense solvers hold; use fewer points (training.batch) or a smaller field";
-}
-
 template <typename Scalar>
-int Trainer<Scalar>::segment_length(const StageOptions& stage, bool with_causal) const {
-  int segment = stage.steps;
-  if (stage.resample_every > 0) segment = std::min(segment, stage.resample_every);
+int Trainer<Scalar>::segment_length(int resample_every, bool with_causal) const {
+  int segment = options_.stages[stage_].steps;
+  if (resample_every > 0) segment = std::min(segment, resample_every);
   if (with_causal && options_.causal.enabled) segment = std::min(segment, options_.causal.every);
   if (options_.adaptive.enabled) segment = std::min(segment, options_.adaptive.every);
   return segment;
 }
 
 template <typename Scalar>
-bool Trainer<Scalar>::stage_ends(const StageOptions& stage, int segment, int segment_start,
-                                 bool early) const {
-  return stage_step_ >= stage.steps ||
-         (early && (segment >= stage.steps || stage_step_ == segment_start));
+bool Trainer<Scalar>::ends_after_segment(int segment, int segment_start, bool early) const {
+  const int steps = options_.stages[stage_].steps;
+  return stage_step_ >= steps || (early && (segment >= steps || stage_step_ == segment_start));
 }
 
 template <typename Scalar>
-void Trainer<Scalar>::renew_points(const StageOptions& stage) {
+void Trainer<Scalar>::renew_points(int resample_every) {
   if (options_.adaptive.enabled) refine();
-  if (stage.resample_every > 0)
+  if (resample_every > 0)
     resample();
   else if (options_.adaptive.enabled)
     join_adaptive_points();
@@ -225,7 +210,8 @@ std::vector<std::pair<std::string, double>> Trainer<Scalar>::extra_metrics() con
 }
 
 template <typename Scalar>
-Progress Trainer<Scalar>::progress(const StageOptions& stage, double lr) const {
+Progress Trainer<Scalar>::progress(double lr) const {
+  const StageOptions& stage = options_.stages[stage_];
   Progress p;
   p.stage = stage_;
   p.optimizer = stage.optimizer;
@@ -241,9 +227,9 @@ Progress Trainer<Scalar>::progress(const StageOptions& stage, double lr) const {
   const long done = global_step_ - stage_started_step_;
   p.steps_per_second = elapsed > 0 ? done / elapsed : 0;
   p.eta_seconds = p.steps_per_second > 0 ? (p.total_steps - p.step) / p.steps_per_second : 0;
-  if (stage.seconds > 0) {
+  if (time_budget_ > 0) {
     // A time budget ends the stage first when it is shorter than its steps would take.
-    const double left = std::max(0.0, stage.seconds - elapsed);
+    const double left = std::max(0.0, time_budget_ - elapsed);
     const double later = p.steps_per_second > 0
                              ? (p.total_steps - (p.step - stage_step_ + stage.steps)) / p.steps_per_second
                              : 0;
@@ -253,302 +239,24 @@ Progress Trainer<Scalar>::progress(const StageOptions& stage, double lr) const {
 }
 
 template <typename Scalar>
-void Trainer<Scalar>::report(const Callbacks& callbacks, const StageOptions& stage, double lr) {
-  if (callbacks.progress) callbacks.progress(progress(stage, lr));
-}
-
-template <typename Scalar>
-bool Trainer<Scalar>::run_adam(const StageOptions& stage, const Callbacks& callbacks) {
-  if (!adam_) adam_ = std::make_unique<Adam<Scalar>>(field_.parameter_count(), AdamOptions{stage.lr});
-  autodiff::Vector<Scalar> gradient(field_.parameter_count());
-  for (; stage_step_ < stage.steps; ++stage_step_) {
-    if (callbacks.stop_requested && callbacks.stop_requested()) return false;
-    const double start = now_seconds();
-    const bool refine_now = options_.adaptive.enabled && global_step_ > 0 &&
-                            global_step_ % options_.adaptive.every == 0;
-    if (refine_now) refine();
-    const bool drawn = std::all_of(residuals_.begin(), residuals_.end(), [](const auto& r) { return r != nullptr; });
-    if (refine_now || global_step_ % options_.resample_every == 0 || !drawn) resample();
-    if (options_.causal.enabled) update_causal();
-    if (options_.balance.method == "grad_norm" && global_step_ % options_.balance.every == 0)
-      balanced_gradient(gradient.data());
-    else
-      loss_and_gradient(field_.parameters().data(), gradient.data());
-    const double spent = now_seconds() - stage_started_;
-    const double lr = stage.seconds > 0 ? stage.learning_rate_at(std::min(1.0, spent / stage.seconds))
-                                        : stage.learning_rate(stage_step_);
-    adam_->step(field_.parameters().data(), gradient.data(), lr);
-    step_ms_.push_back(1e3 * (now_seconds() - start));
-    ++global_step_;
-    report(callbacks, stage, lr);
-    if (options_.checkpoint_every > 0 && global_step_ % options_.checkpoint_every == 0 &&
-        callbacks.checkpoint) {
-      ++stage_step_;  // the saved state resumes after this step
-      callbacks.checkpoint();
-      --stage_step_;
-    }
-    if (stage.seconds > 0 && now_seconds() - stage_started_ >= stage.seconds) {
-      ++stage_step_;  // the stage is over: its budget is spent (the steps count what was run)
-      break;
-    }
-  }
-  return true;
-}
-
-namespace {
-
-// The summed loss as a Ceres first-order function, in double whatever the training scalar.
-template <typename Scalar>
-class LossFunction final : public ceres::FirstOrderFunction {
- public:
-  LossFunction(int parameters, std::function<double(const Scalar*, Scalar*)> evaluate)
-      : parameters_(parameters), evaluate_(std::move(evaluate)), theta_(parameters), gradient_(parameters) {}
-  bool Evaluate(const double* parameters, double* cost, double* gradient) const override {
-    theta_ = Eigen::Map<const Eigen::VectorXd>(parameters, parameters_).cast<Scalar>();
-    *cost = evaluate_(theta_.data(), gradient_.data());
-    if (gradient) Eigen::Map<Eigen::VectorXd>(gradient, parameters_) = gradient_.template cast<double>();
-    return std::isfinite(*cost);
-  }
-  int NumParameters() const override { return parameters_; }
-
- private:
-  int parameters_;
-  std::function<double(const Scalar*, Scalar*)> evaluate_;
-  mutable autodiff::Vector<Scalar> theta_, gradient_;
-};
-
-class StepCallback final : public ceres::IterationCallback {
- public:
-  using OnStep = std::function<bool(const ceres::IterationSummary&)>;
-  explicit StepCallback(OnStep on_step) : on_step_(std::move(on_step)) {}
-  ceres::CallbackReturnType operator()(const ceres::IterationSummary& summary) override {
-    if (summary.iteration == 0) return ceres::SOLVER_CONTINUE;
-    return on_step_(summary) ? ceres::SOLVER_CONTINUE : ceres::SOLVER_TERMINATE_SUCCESSFULLY;
-  }
-
- private:
-  OnStep on_step_;
-};
-
-// One loss term as a Ceres cost function: N·C residuals √(w/N)·r (point-major) over the
-// single parameter block θ. Ceres evaluates it from one thread (num_threads = 1); the
-// Jacobian pass runs in parallel inside.
-template <typename Scalar>
-class TermCost final : public ceres::CostFunction {
- public:
-  TermCost(const fields::Field<Scalar>& network, const autodiff::StreamLayout& layout,
-           const autodiff::Matrix<Scalar>& points,
-           std::unique_ptr<autodiff::StreamResidual<Scalar>> residual)
-      : network_(network), layout_(layout), points_(points), residual_(std::move(residual)) {
-    this->set_num_residuals(static_cast<int>(points.rows() * residual_->components()));
-    this->mutable_parameter_block_sizes()->push_back(static_cast<int>(network.parameter_count()));
-  }
-
-  bool Evaluate(double const* const* parameters, double* residuals,
-                double** jacobians) const override {
-    const Eigen::Index m = this->num_residuals(), p = network_.parameter_count();
-    double* jacobian = jacobians ? jacobians[0] : nullptr;
-    if constexpr (std::is_same_v<Scalar, double>) {
-      network_.residuals_and_jacobian(parameters[0], layout_, autodiff::Batch<Scalar>{points_}, *residual_, residuals,
-                                      jacobian);
-    } else {
-      theta_ = Eigen::Map<const Eigen::VectorXd>(parameters[0], p).cast<Scalar>();
-      r_.resize(m);
-      if (jacobian) j_.resize(m * p);
-      network_.residuals_and_jacobian(theta_.data(), layout_, autodiff::Batch<Scalar>{points_}, *residual_, r_.data(),
-                                      jacobian ? j_.data() : nullptr);
-      Eigen::Map<Eigen::VectorXd>(residuals, m) = r_.template cast<double>();
-      if (jacobian) Eigen::Map<Eigen::VectorXd>(jacobian, m * p) = j_.template cast<double>();
-    }
-    const Eigen::Map<const Eigen::VectorXd> r(residuals, m);
-    if (!r.allFinite()) return false;
-    if (jacobian) {
-      if (!Eigen::Map<const Eigen::VectorXd>(jacobian, m * p).allFinite()) return false;
-      // A trust-region method evaluates Jacobians only at its iterates.
-      loss_at_iterate_ = r.squaredNorm();
-    }
-    return true;
-  }
-
-  // This term's loss (Σ f²) at the last point where the Jacobian was evaluated.
-  double loss_at_iterate() const { return loss_at_iterate_; }
-  // Its loss at θ, from a forward pass.
-  double loss_at(const double* theta) const {
-    Eigen::VectorXd r(this->num_residuals());
-    const double* parameters[] = {theta};
-    return Evaluate(parameters, r.data(), nullptr) ? r.squaredNorm() : NAN;
-  }
-
- private:
-  const fields::Field<Scalar>& network_;
-  const autodiff::StreamLayout& layout_;
-  const autodiff::Matrix<Scalar>& points_;
-  std::unique_ptr<autodiff::StreamResidual<Scalar>> residual_;
-  mutable autodiff::Vector<Scalar> theta_, r_, j_;
-  mutable double loss_at_iterate_ = NAN;
-};
-
-}  // namespace
-
-template <typename Scalar>
-bool Trainer<Scalar>::run_lbfgs(const StageOptions& stage, const Callbacks& callbacks) {
-  if (stage_step_ >= stage.steps) return true;
-  resample();
-  // λ stays as it is for the whole stage, and causal weights and the RAR set for a segment
-  // of `every` iterations: a line search needs one objective. Each segment restarts Ceres
-  // (and so the L-BFGS history) on the updated objective.
-  const int segment = segment_length(stage, options_.causal.enabled);
+void Trainer<Scalar>::prepare_step() {
+  const bool refine_now = options_.adaptive.enabled && global_step_ > 0 &&
+                          global_step_ % options_.adaptive.every == 0;
+  if (refine_now) refine();
+  const bool drawn = std::all_of(residuals_.begin(), residuals_.end(), [](const auto& r) { return r != nullptr; });
+  if (refine_now || global_step_ % options_.resample_every == 0 || !drawn) resample();
   if (options_.causal.enabled) update_causal();
-  Eigen::VectorXd theta = field_.parameters().template cast<double>();
-  auto* function = new LossFunction<Scalar>(
-      static_cast<int>(field_.parameter_count()),
-      [this](const Scalar* p, Scalar* g) { return loss_and_gradient(p, g); });
-  ceres::GradientProblem problem(function);  // takes ownership
-  ceres::GradientProblemSolver::Options options;
-  options.line_search_direction_type = ceres::LBFGS;
-  options.max_lbfgs_rank = stage.memory;
-  options.function_tolerance = 0;
-  options.gradient_tolerance = 0;
-  options.parameter_tolerance = 0;
-  options.logging_type = ceres::SILENT;
-  options.update_state_every_iteration = true;
-  bool stopped = false;
-  double last = now_seconds();
-  StepCallback callback([&](const ceres::IterationSummary&) {
-    // Ceres has just accepted a step; the parameter block holds it.
-    field_.parameters() = theta.cast<Scalar>();
-    stopped = !finish_ceres_step(stage, callbacks, last);
-    return !stopped;
-  });
-  options.callbacks.push_back(&callback);
-  while (true) {
-    options.max_num_iterations = std::min(segment, stage.steps - stage_step_);
-    const int segment_start = stage_step_;
-    ceres::GradientProblemSolver::Summary summary;
-    ceres::Solve(options, problem, theta.data(), &summary);
-    field_.parameters() = theta.cast<Scalar>();
-    // A segment that ends early (its line search found no decrease) ends the stage only when
-    // the objective cannot change (no segments) or it made no step at all: an update of the
-    // weights or points can give L-BFGS somewhere to go again.
-    const bool early = summary.termination_type != ceres::NO_CONVERGENCE;
-    if (stopped || stage_ends(stage, segment, segment_start, early)) break;
-    renew_points(stage);
-    if (options_.causal.enabled) update_causal();
-  }
-  // Converged early (no further decrease possible): the stage is done.
-  if (!stopped) {
-    global_step_ += stage.steps - stage_step_;
-    stage_step_ = stage.steps;
-  }
-  return !stopped;
 }
 
 template <typename Scalar>
-bool Trainer<Scalar>::finish_ceres_step(const StageOptions& stage, const Callbacks& callbacks,
-                                        double& last) {
-  const double t = now_seconds();
-  step_ms_.push_back(1e3 * (t - last));
-  last = t;
+void Trainer<Scalar>::finish_step(double learning_rate, double milliseconds) {
+  step_ms_.push_back(milliseconds);
   ++stage_step_;
   ++global_step_;
-  report(callbacks, stage, 0.0);
+  if (callbacks_->progress) callbacks_->progress(progress(learning_rate));
   if (options_.checkpoint_every > 0 && global_step_ % options_.checkpoint_every == 0 &&
-      callbacks.checkpoint)
-    callbacks.checkpoint();
-  return !(callbacks.stop_requested && callbacks.stop_requested());
-}
-
-template <typename Scalar>
-bool Trainer<Scalar>::run_lm(const StageOptions& stage, const Callbacks& callbacks) {
-  if (stage_step_ >= stage.steps) return true;
-  resample();
-  // The least-squares problem is fixed for a segment of iterations: the whole stage, or
-  // `resample_every` (new points) or adaptive.every (RAR points added) iterations. Each
-  // segment is a new Ceres problem that starts from the trust-region radius the last ended
-  // with, so the damping carries over.
-  const int segment = segment_length(stage, false);
-  Eigen::VectorXd theta = field_.parameters().template cast<double>();
-  ceres::Solver::Options options;
-  options.minimizer_type = ceres::TRUST_REGION;
-  options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-  options.linear_solver_type =
-      stage.linear_solver == "dense_normal_cholesky" ? ceres::DENSE_NORMAL_CHOLESKY : ceres::DENSE_QR;
-  options.initial_trust_region_radius = stage.initial_radius;
-  // Run the steps asked for; stop early only when no step decreases the loss any more
-  // (the trust region collapses), not at Ceres' default relative tolerances, which end
-  // far above the accuracy a double-precision field can reach.
-  options.function_tolerance = 0;
-  options.gradient_tolerance = 0;
-  options.parameter_tolerance = 0;
-  // Evaluation is parallel inside each cost function already.
-  options.num_threads = 1;
-  options.logging_type = ceres::SILENT;
-  options.update_state_every_iteration = true;
-  bool stopped = false;
-  double last = now_seconds();
-  std::vector<std::unique_ptr<TermCost<Scalar>>> costs;
-  StepCallback callback([&](const ceres::IterationSummary& summary) {
-    field_.parameters() = theta.template cast<Scalar>();
-    double total = 0;
-    for (size_t k = 0; k < costs.size(); ++k) total += losses_[k] = costs[k]->loss_at_iterate();
-    // Ceres' cost is ½Σf²; should its last Jacobian not have been at the iterate, recompute.
-    if (!(std::abs(total - 2 * summary.cost) <= 1e-9 * 2 * summary.cost))
-      for (size_t k = 0; k < costs.size(); ++k) losses_[k] = costs[k]->loss_at(theta.data());
-    stopped = !finish_ceres_step(stage, callbacks, last);
-    return !stopped;
-  });
-  options.callbacks.push_back(&callback);
-  while (true) {
-    // Ceres counts the entries of its dense Jacobian in an int.
-    double rows = 0;
-    for (size_t k = 0; k < terms_.size(); ++k) {
-      if (!points_[k].groups.empty())
-        throw std::runtime_error("training stage " + std::to_string(stage_ + 1) +
-                                 " (lm): loss term '" + terms_[k].name +
-                                 "' reads groups of points; Levenberg-Marquardt takes per-point "
-                                 "residuals only (use adam or lbfgs)");
-      rows += static_cast<double>(points_[k].x.rows()) * residuals_[k]->components();
-    }
-    const std::string too_large = lm_jacobian_too_large(rows, field_.parameter_count());
-    if (!too_large.empty())
-      throw std::runtime_error("training stage " + std::to_string(stage_ + 1) +
-                               " (lm): its Jacobian would be " + too_large);
-    costs.clear();
-    for (size_t k = 0; k < terms_.size(); ++k)
-      costs.push_back(std::make_unique<TermCost<Scalar>>(
-          field_, layouts_[k], points_scalar_[k],
-          // λ of training.balance is held fixed here, as in L-BFGS; causal weights are not
-          // applied in this stage (its residuals are the plain ones).
-          std::make_unique<ScaledResidual<Scalar>>(*residuals_[k], terms_[k].weight * balance_[k],
-                                                   points_[k].x.rows())));
-    ceres::Problem::Options problem_options;
-    problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-    ceres::Problem problem(problem_options);
-    for (const auto& cost : costs) problem.AddResidualBlock(cost.get(), nullptr, theta.data());
-    options.max_num_iterations = std::min(segment, stage.steps - stage_step_);
-    const int segment_start = stage_step_;
-    ceres::Solver::Summary summary;
-    ceres::Solve(options, &problem, &summary);
-    // Failing later (e.g. too many non-finite trial steps) ends the stage at its last iterate.
-    if (summary.termination_type == ceres::FAILURE && summary.iterations.empty())
-      throw std::runtime_error("training stage " + std::to_string(stage_ + 1) +
-                               " (lm): Ceres failed: " + summary.message);
-    field_.parameters() = theta.cast<Scalar>();
-    if (summary.iterations.size() <= 1)  // no step taken: report the losses at the start
-      for (size_t k = 0; k < costs.size(); ++k) losses_[k] = costs[k]->loss_at(theta.data());
-    if (!summary.iterations.empty())
-      options.initial_trust_region_radius = summary.iterations.back().trust_region_radius;
-    // As in L-BFGS: an early end (the trust region collapsed) ends the stage only when the
-    // problem cannot change or the segment made no step at all.
-    const bool early = summary.termination_type != ceres::NO_CONVERGENCE;
-    if (stopped || stage_ends(stage, segment, segment_start, early)) break;
-    renew_points(stage);
-  }
-  if (!stopped) {
-    global_step_ += stage.steps - stage_step_;
-    stage_step_ = stage.steps;
-  }
-  return !stopped;
+      callbacks_->checkpoint)
+    callbacks_->checkpoint();
 }
 
 template <typename Scalar>
@@ -558,11 +266,12 @@ bool Trainer<Scalar>::run(const Callbacks& callbacks) {
     const double stage_started = stage_started_ = now_seconds();
     stage_started_step_ = global_step_;
     begin_stage();
-    if (callbacks.stage_begins) callbacks.stage_begins(progress(stage, stage.lr));
-    const bool finished = stage.optimizer == "lbfgs" ? run_lbfgs(stage, callbacks)
-                          : stage.optimizer == "lm"  ? run_lm(stage, callbacks)
-                                                     : run_adam(stage, callbacks);
-    if (!finished) return false;
+    time_budget_ = 0;
+    if (callbacks.stage_begins) callbacks.stage_begins(progress(0.0));
+    if (!optimizer_) optimizer_ = stage.settings->clone();  // a resumed stage has its own
+    callbacks_ = &callbacks;
+    TrainingStage<Scalar> view(*this);
+    if (!optimizer_->run(view)) return false;
     double total = 0;
     for (double l : losses_) total += l;
     stage_losses_.push_back(total);
@@ -570,7 +279,7 @@ bool Trainer<Scalar>::run(const Callbacks& callbacks) {
     stage_errors_.push_back(callbacks.stage_error ? callbacks.stage_error()
                                                   : std::numeric_limits<double>::quiet_NaN());
     stage_step_ = 0;
-    adam_.reset();
+    optimizer_.reset();
   }
   return true;
 }
@@ -584,11 +293,7 @@ void Trainer<Scalar>::save_state(io::H5Writer& file) const {
   std::ostringstream engine;
   engine << rng_;
   file.write_attribute("trainer", "random_engine", engine.str());
-  if (adam_) {
-    file.write("trainer/adam/m", adam_->first_moment());
-    file.write("trainer/adam/v", adam_->second_moment());
-    file.write_attribute("trainer/adam/m", "t", static_cast<std::int64_t>(adam_->steps()));
-  }
+  if (optimizer_) optimizer_->save(file, "trainer");
   for (size_t k = 0; k < terms_.size(); ++k)
     // Points with a context (rays and their pixels) are drawn anew on resume.
     if (points_[k].x.size() > 0 && !points_[k].context) {
@@ -613,12 +318,10 @@ void Trainer<Scalar>::load_state(const io::H5Reader& file) {
   global_step_ = file.read_attribute<std::int64_t>("trainer", "global_step");
   std::istringstream engine(file.read_attribute<std::string>("trainer", "random_engine"));
   engine >> rng_;
-  if (file.has_dataset("trainer/adam/m") && stage_ < static_cast<int>(options_.stages.size())) {
-    adam_ = std::make_unique<Adam<Scalar>>(field_.parameter_count(),
-                                           AdamOptions{options_.stages[stage_].lr});
-    adam_->first_moment() = file.read_vector<Scalar>("trainer/adam/m");
-    adam_->second_moment() = file.read_vector<Scalar>("trainer/adam/v");
-    adam_->set_steps(file.read_attribute<std::int64_t>("trainer/adam/m", "t"));
+  optimizer_.reset();
+  if (stage_ < static_cast<int>(options_.stages.size())) {
+    optimizer_ = options_.stages[stage_].settings->clone();
+    optimizer_->load(file, "trainer");
   }
   for (size_t k = 0; k < terms_.size(); ++k) {
     const std::string name = "trainer/points/" + std::to_string(k);
@@ -661,6 +364,88 @@ void Trainer<Scalar>::load_state(const io::H5Reader& file) {
   }
 }
 
+template <typename Scalar>
+int TrainingStage<Scalar>::index() const { return trainer_.stage_; }
+template <typename Scalar>
+int TrainingStage<Scalar>::steps() const { return trainer_.options_.stages[trainer_.stage_].steps; }
+template <typename Scalar>
+int TrainingStage<Scalar>::step() const { return trainer_.stage_step_; }
+template <typename Scalar>
+fields::Field<Scalar>& TrainingStage<Scalar>::field() { return trainer_.field_; }
+template <typename Scalar>
+std::size_t TrainingStage<Scalar>::term_count() const { return trainer_.terms_.size(); }
+template <typename Scalar>
+const std::string& TrainingStage<Scalar>::term_name(std::size_t k) const { return trainer_.names_.at(k); }
+template <typename Scalar>
+const TermPoints& TrainingStage<Scalar>::points(std::size_t k) const { return trainer_.points_.at(k); }
+template <typename Scalar>
+const autodiff::Matrix<Scalar>& TrainingStage<Scalar>::points_in_scalar(std::size_t k) const {
+  return trainer_.points_scalar_.at(k);
+}
+template <typename Scalar>
+const Residual& TrainingStage<Scalar>::residual(std::size_t k) const { return *trainer_.residuals_.at(k); }
+template <typename Scalar>
+const autodiff::StreamLayout& TrainingStage<Scalar>::layout(std::size_t k) const {
+  return trainer_.layouts_.at(k);
+}
+template <typename Scalar>
+double TrainingStage<Scalar>::weight(std::size_t k) const {
+  return trainer_.terms_.at(k).weight * trainer_.balance_.at(k);
+}
+template <typename Scalar>
+void TrainingStage<Scalar>::set_term_loss(std::size_t k, double loss) { trainer_.losses_.at(k) = loss; }
+template <typename Scalar>
+double TrainingStage<Scalar>::loss_and_gradient(const Scalar* params, Scalar* gradient) {
+  return trainer_.loss_and_gradient(params, gradient);
+}
+template <typename Scalar>
+void TrainingStage<Scalar>::prepare_step() { trainer_.prepare_step(); }
+template <typename Scalar>
+void TrainingStage<Scalar>::step_gradient(Scalar* gradient) {
+  const TrainingOptions& o = trainer_.options_;
+  if (o.balance.method == "grad_norm" && trainer_.global_step_ % o.balance.every == 0)
+    trainer_.balanced_gradient(gradient);
+  else
+    trainer_.loss_and_gradient(trainer_.field_.parameters().data(), gradient);
+}
+template <typename Scalar>
+void TrainingStage<Scalar>::draw_points() { trainer_.resample(); }
+template <typename Scalar>
+bool TrainingStage<Scalar>::causal() const { return trainer_.options_.causal.enabled; }
+template <typename Scalar>
+void TrainingStage<Scalar>::update_causal_weights() { trainer_.update_causal(); }
+template <typename Scalar>
+int TrainingStage<Scalar>::segment_length(int resample_every, bool with_causal) const {
+  return trainer_.segment_length(resample_every, with_causal);
+}
+template <typename Scalar>
+bool TrainingStage<Scalar>::ends_after_segment(int segment, int segment_start, bool early) const {
+  return trainer_.ends_after_segment(segment, segment_start, early);
+}
+template <typename Scalar>
+void TrainingStage<Scalar>::renew_points(int resample_every) { trainer_.renew_points(resample_every); }
+template <typename Scalar>
+double TrainingStage<Scalar>::seconds() const { return now_seconds() - trainer_.stage_started_; }
+template <typename Scalar>
+void TrainingStage<Scalar>::set_time_budget(double seconds) { trainer_.time_budget_ = seconds; }
+template <typename Scalar>
+bool TrainingStage<Scalar>::stop_requested() const {
+  const auto& stop = trainer_.callbacks_->stop_requested;
+  return stop && stop();
+}
+template <typename Scalar>
+void TrainingStage<Scalar>::finish_step(double learning_rate, double milliseconds) {
+  trainer_.finish_step(learning_rate, milliseconds);
+}
+template <typename Scalar>
+void TrainingStage<Scalar>::finish_early() {
+  const int steps = this->steps();
+  trainer_.global_step_ += steps - trainer_.stage_step_;
+  trainer_.stage_step_ = steps;
+}
+
+template class TrainingStage<float>;
+template class TrainingStage<double>;
 template class Trainer<float>;
 template class Trainer<double>;
 

@@ -1,21 +1,9 @@
 // SPDX-License-Identifier: MIT
 //
 // The training loop: optimizer stages run one after another over a problem's loss terms.
-//
-//   adam   each step draws new points for every term (every `resample_every` steps),
-//          sums the terms' parameter gradients (one chunked forward/reverse pass per term)
-//          and takes one Adam step at the stage's scheduled learning rate.
-//   lbfgs  draws one point set per term and minimizes the summed loss on it with Ceres'
-//          L-BFGS (ceres::GradientProblemSolver), one step per Ceres iteration.
-//   lm     draws one point set per term and minimizes the same loss as a least-squares
-//          problem with Ceres' Levenberg–Marquardt (ceres::Problem, one parameter block θ
-//          in double, one cost function per loss term whose N·C residuals are √(w/N)·r at
-//          the term's points, so Ceres' ½Σf² is half the loss). Jacobians come from the
-//          reverse pass per point (Sequential::residuals_and_jacobian), in the training
-//          scalar, converted to double. A dense linear solver (the stage's linear_solver)
-//          factors the (Σ N·C) × P Jacobian: memory and time grow as N·P and N·P², which
-//          suits small fields (P up to a few thousand) and a few thousand points. One step
-//          per Ceres iteration, a rejected step included.
+// Each stage's optimizer is an object made from the optimizer registry
+// (solvers/optimizer.h; adam, lbfgs and lm are described in solvers/optimizers.h); the
+// trainer runs it through a TrainingStage and knows none by name.
 //
 // A stage that stops early because its optimizer cannot decrease the loss further
 // (converged) counts as finished, with all its steps.
@@ -41,8 +29,8 @@
 
 #include "fields/field.h"
 #include "io/hdf5_file.h"
-#include "solvers/adam.h"
 #include "solvers/loss_balancing.h"
+#include "solvers/optimizer.h"
 #include "solvers/problem.h"
 #include "solvers/training_options.h"
 
@@ -105,6 +93,8 @@ class Trainer {
   void load_state(const io::H5Reader& file);
 
  private:
+  friend class TrainingStage<Scalar>;
+
   void resample();
   double loss_and_gradient(const Scalar* params, Scalar* gradient);
   double term_loss(size_t k, const Scalar* params, double weight, Scalar* gradient);
@@ -113,29 +103,17 @@ class Trainer {
   // Tells the field and the terms that stage_ starts and rebuilds the residuals of the terms
   // that listen.
   void begin_stage();
-  // Iterations per segment of a Ceres stage (one problem for Ceres): the whole stage, or
-  // fewer where the point set changes (resample_every, adaptive.every) or, with_causal, the
-  // causal weights (causal.every; L-BFGS only).
-  int segment_length(const StageOptions& stage, bool with_causal) const;
-  // Whether a Ceres stage is over after a segment that began at step segment_start: all its
-  // steps are taken, or the segment ended early (`early`, no decrease found) and either the
-  // stage has no further segments or the segment made no step at all.
-  bool stage_ends(const StageOptions& stage, int segment, int segment_start, bool early) const;
-  // Between segments of a Ceres stage: RAR points, then a new point set (resample_every) or
-  // the RAR set joined to the stage's own points.
-  void renew_points(const StageOptions& stage);
+  // See TrainingStage (solvers/optimizer.h).
+  void prepare_step();
+  int segment_length(int resample_every, bool with_causal) const;
+  bool ends_after_segment(int segment, int segment_start, bool early) const;
+  void renew_points(int resample_every);
+  void finish_step(double learning_rate, double milliseconds);
   // Puts the RAR set behind the PDE term's own points of the stage.
   void join_adaptive_points();
   void update_causal();
   void balanced_gradient(Scalar* gradient);
-  bool run_adam(const StageOptions& stage, const Callbacks& callbacks);
-  bool run_lbfgs(const StageOptions& stage, const Callbacks& callbacks);
-  bool run_lm(const StageOptions& stage, const Callbacks& callbacks);
-  // After a Ceres iteration has been accepted or rejected: parameters, step counters,
-  // progress and checkpoints. Returns false when a stop is requested.
-  bool finish_ceres_step(const StageOptions& stage, const Callbacks& callbacks, double& last);
-  Progress progress(const StageOptions& stage, double lr) const;
-  void report(const Callbacks& callbacks, const StageOptions& stage, double lr);
+  Progress progress(double lr) const;
 
   const Problem& problem_;
   fields::Field<Scalar>& field_;
@@ -147,7 +125,9 @@ class Trainer {
   std::vector<autodiff::Matrix<Scalar>> points_scalar_;
   std::vector<std::unique_ptr<Residual>> residuals_;
   std::vector<double> losses_, stage_losses_, stage_errors_, stage_seconds_, step_ms_;
-  std::unique_ptr<Adam<Scalar>> adam_;
+  std::unique_ptr<Optimizer> optimizer_;  // of the current stage, while it runs or resumes
+  const Callbacks* callbacks_ = nullptr;  // of the current run()
+  double time_budget_ = 0;                // of the current stage (TrainingStage::set_time_budget)
   Random rng_;
   int stage_ = 0;
   int stage_step_ = 0;
@@ -161,10 +141,5 @@ class Trainer {
   std::vector<double> balance_;           // λ per term (1 unless grad_norm)
   CausalWeights causal_;
 };
-
-// Ceres' dense solvers index the Jacobian with an int: for rows × parameters beyond 2³¹ − 1,
-// the end of a message ("R residuals x P parameters, more than … ; use fewer points …");
-// empty when it fits. The trainer refuses such an LM stage, load_run such a config.
-std::string lm_jacobian_too_large(double rows, Eigen::Index parameters);
 
 }  // namespace nfield::solvers

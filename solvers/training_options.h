@@ -28,35 +28,36 @@
 // dense_qr) and initial_radius (Ceres' initial trust-region radius, default 1e4, in
 // [1e-12, 1e16]; the first damping is about its inverse); lbfgs and lm read resample_every
 // (0, the default: one point set for the stage; k: a new set every k iterations, each a new
-// Ceres problem). Keys of another optimizer are rejected as unknown.
+// Ceres problem). Keys of another optimizer are rejected as unknown. Each optimizer reads its
+// own keys (solvers/optimizers.cc; their typed options and defaults in solvers/optimizers.h).
 #pragma once
 
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "io/config.h"
 #include "solvers/loss_balancing.h"
+#include "solvers/optimizer.h"
 
 namespace nfield::solvers {
 
 struct StageOptions {
-  std::string optimizer = "adam";    // adam | lbfgs | lm
-  int steps = 1000;
-  double lr = 1e-3;                  // adam: initial learning rate
-  std::string schedule = "constant"; // adam: constant | cosine | exponential
-  double lr_final = 1e-5;            // adam: learning rate at the last step (cosine, exponential)
-  int memory = 20;                   // lbfgs: history length
-  std::string linear_solver = "dense_qr";  // lm: dense_qr | dense_normal_cholesky
-  double initial_radius = 1e4;       // lm: initial trust-region radius
-  int resample_every = 0;            // lbfgs, lm: new points every k iterations (0: one set)
-  double seconds = 0;                // adam: > 0 ends the stage after this much wall time
+  StageOptions();  // adam with its defaults
 
-  // The Adam learning rate at step `step` (0-based) of this stage.
-  double learning_rate(int step) const;
-  // The same at a fraction of the stage done, in [0, 1].
-  double learning_rate_at(double progress) const;
+  std::string optimizer = "adam";  // a name of the optimizer registry (solvers/optimizer.h)
+  int steps = 1000;
+  // The optimizer with this stage's own keys read; each run of the stage works on a clone.
+  std::shared_ptr<const Optimizer> settings;
+
+  // The optimizer's typed options (AdamStageOptions, … in solvers/optimizers.h);
+  // std::bad_cast when the stage's optimizer has others.
+  template <class Options>
+  const Options& options() const {
+    return dynamic_cast<const OptimizerWithOptions<Options>&>(*settings).options;
+  }
 };
 
 struct TrainingOptions {

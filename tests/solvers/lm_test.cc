@@ -15,6 +15,7 @@
 
 #include "io/config.h"
 #include "io/hdf5_file.h"
+#include "solvers/optimizers.h"
 #include "solvers/run.h"
 #include "solvers/trainer.h"
 #include "tests/testing/config_errors.h"
@@ -281,8 +282,8 @@ TEST(LevenbergMarquardtConfig, ResolvedConfigKeepsTheKeys) {
   const StageOptions& stage = setup.training.stages[0];
   EXPECT_EQ(stage.optimizer, "lm");
   EXPECT_EQ(stage.steps, 7);
-  EXPECT_EQ(stage.linear_solver, "dense_normal_cholesky");
-  EXPECT_EQ(stage.initial_radius, 0.5);
+  EXPECT_EQ(stage.options<LmStageOptions>().linear_solver, "dense_normal_cholesky");
+  EXPECT_EQ(stage.options<LmStageOptions>().initial_radius, 0.5);
   const YAML::Node written = setup.training.to_yaml()["stages"][0];
   EXPECT_EQ(written["optimizer"].as<std::string>(), "lm");
   EXPECT_EQ(written["linear_solver"].as<std::string>(), "dense_normal_cholesky");
@@ -294,8 +295,8 @@ TEST(LevenbergMarquardtConfig, ResolvedConfigKeepsTheKeys) {
       write_config(poisson_config(kSmallMlp, "{interior: 10, boundary: 4}",
                                   "    - {optimizer: lm, steps: 7}\n")),
       {});
-  EXPECT_EQ(defaults.training.stages[0].linear_solver, "dense_qr");
-  EXPECT_EQ(defaults.training.stages[0].initial_radius, 1e4);
+  EXPECT_EQ(defaults.training.stages[0].options<LmStageOptions>().linear_solver, "dense_qr");
+  EXPECT_EQ(defaults.training.stages[0].options<LmStageOptions>().initial_radius, 1e4);
 }
 
 }  // namespace

@@ -1,0 +1,263 @@
+// SPDX-License-Identifier: MIT
+//
+// The registered encoding types (fields/encoding_type.h), the registry, and what depends on
+// it: EncodingOptions::validate, encoding_matrix, make_encoding.
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <span>
+#include <stdexcept>
+#include <type_traits>
+
+#include "autodiff/elementwise.h"
+#include "fields/activations.h"
+#include "fields/encoding_type.h"
+#include "fields/encodings.h"
+#include "fields/hash_grid.h"
+#include "io/registry.h"
+
+namespace nfield::fields {
+namespace {
+
+[[noreturn]] void reject(const std::string& option, const std::string& value,
+                         const std::string& rule) {
+  throw std::invalid_argument("encoding." + option + " = " + value + ": " + rule);
+}
+
+// Standard normal draws that do not depend on the standard library's distributions.
+double normal(std::mt19937_64& rng) {
+  const double u1 = (static_cast<double>(rng() >> 11) + 0.5) * 0x1.0p-53;
+  const double u2 = static_cast<double>(rng() >> 11) * 0x1.0p-53;
+  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * std::numbers::pi * u2);
+}
+
+// |z|, with derivative sign(z) (0 at z = 0) and no higher ones.
+template <typename Scalar>
+class Abs final : public autodiff::ElementwiseFunction<Scalar> {
+ public:
+  void derivatives(const Eigen::Ref<const autodiff::Matrix<Scalar>>& z, int max_order,
+                   std::vector<autodiff::Matrix<Scalar>>& tables) const override {
+    tables.resize(max_order + 1);
+    for (auto& table : tables) table.resize(z.rows(), z.cols());
+    tables[0] = z.cwiseAbs();
+    if (max_order >= 1)
+      tables[1] = z.unaryExpr([](Scalar v) { return Scalar((v > 0) - (v < 0)); });
+    for (int m = 2; m <= max_order; ++m) tables[m].setZero();
+  }
+};
+
+// γ(x) = [x if include_input, sin(x Bᵀ), cos(x Bᵀ)] as one sine over [B; B] with phases
+// [0; π/2].
+template <typename Scalar>
+std::unique_ptr<autodiff::Module<Scalar>> sinusoids(const Eigen::MatrixXd& b, bool include_input) {
+  const Eigen::Index m = b.rows();
+  Eigen::MatrixXd doubled(2 * m, b.cols());
+  doubled << b, b;
+  Eigen::VectorXd phase(2 * m);
+  phase << Eigen::VectorXd::Zero(m), Eigen::VectorXd::Constant(m, std::numbers::pi / 2);
+  return std::make_unique<FeatureEncoding<Scalar>>(
+      doubled, phase, make_activation<Scalar>({"sine", 1.0}), include_input);
+}
+
+class IdentityType final : public EncodingTypeOf<IdentityType> {
+ public:
+  template <typename Scalar>
+  static std::unique_ptr<autodiff::Module<Scalar>> make(const EncodingOptions&, int) {
+    return nullptr;
+  }
+};
+
+class PositionalType final : public EncodingTypeOf<PositionalType> {
+ public:
+  void validate(const EncodingOptions& o) const override {
+    if (o.frequencies < 1 || o.frequencies > 24)
+      reject("frequencies", std::to_string(o.frequencies), "must be in [1, 24]");
+  }
+  Eigen::MatrixXd matrix(const EncodingOptions& o, int input_dim) const override {
+    Eigen::MatrixXd b = Eigen::MatrixXd::Zero(o.frequencies * input_dim, input_dim);
+    for (int l = 0; l < o.frequencies; ++l)
+      for (int i = 0; i < input_dim; ++i) b(l * input_dim + i, i) = std::ldexp(std::numbers::pi, l);
+    return b;
+  }
+  template <typename Scalar>
+  static std::unique_ptr<autodiff::Module<Scalar>> make(const EncodingOptions& o, int input_dim) {
+    return sinusoids<Scalar>(PositionalType().matrix(o, input_dim), o.include_input);
+  }
+  void read(const io::ConfigNode& e, const EncodingContext&, EncodingOptions& o) const override {
+    if (e.has("frequencies")) o.frequencies = e.get_in_range("frequencies", 1, 24);
+    o.include_input = e.get_or("include_input", true);
+  }
+  void write(const EncodingOptions& o, const EncodingContext&, YAML::Node& n) const override {
+    n["frequencies"] = o.frequencies;
+    n["include_input"] = o.include_input;
+  }
+};
+
+class FourierType final : public EncodingTypeOf<FourierType> {
+ public:
+  void validate(const EncodingOptions& o) const override {
+    if (o.features < 1) reject("features", std::to_string(o.features), "must be >= 1");
+    if (!(o.scale > 0)) reject("scale", std::to_string(o.scale), "must be > 0");
+  }
+  // The 2π of Fourier features is folded into B.
+  Eigen::MatrixXd matrix(const EncodingOptions& o, int input_dim) const override {
+    std::mt19937_64 rng(o.seed);
+    Eigen::MatrixXd b(o.features, input_dim);
+    for (Eigen::Index r = 0; r < b.rows(); ++r)
+      for (Eigen::Index c = 0; c < b.cols(); ++c)
+        b(r, c) = 2.0 * std::numbers::pi * o.scale * normal(rng);
+    return b;
+  }
+  template <typename Scalar>
+  static std::unique_ptr<autodiff::Module<Scalar>> make(const EncodingOptions& o, int input_dim) {
+    return sinusoids<Scalar>(FourierType().matrix(o, input_dim), false);
+  }
+  void read(const io::ConfigNode& e, const EncodingContext& context,
+            EncodingOptions& o) const override {
+    if (e.has("features")) o.features = e.get_in_range("features", 1, 65536);
+    o.scale = e.get_or("scale", o.scale);
+    e.require("scale", o.scale > 0, "expected a number > 0");
+    o.seed = e.has("seed") ? static_cast<std::uint64_t>(e.get_nonnegative<std::int64_t>("seed"))
+                           : context.seed;
+  }
+  void write(const EncodingOptions& o, const EncodingContext&, YAML::Node& n) const override {
+    n["features"] = o.features;
+    n["scale"] = o.scale;
+    n["seed"] = o.seed;
+  }
+};
+
+std::vector<std::string> names_or_default(std::vector<std::string> names, int input_dim) {
+  if (names.empty())
+    for (int a = 0; a < input_dim; ++a) names.push_back(std::string(1, "xyzw"[a % 4]));
+  return names;
+}
+
+class CuspType final : public EncodingTypeOf<CuspType> {
+ public:
+  bool can_enter_late() const override { return true; }
+  void validate(const EncodingOptions& o) const override {
+    if (o.at.empty()) throw std::invalid_argument("encoding.at = []: needs at least one plane");
+    for (double c : o.at)
+      if (!std::isfinite(c)) reject("at", std::to_string(c), "must be finite");
+    if (o.axis < 0) reject("axis", std::to_string(o.axis), "must be >= 0");
+  }
+  void validate_inputs(const EncodingOptions& o, int input_dim) const override {
+    if (o.axis >= input_dim)
+      reject("axis", std::to_string(o.axis), "must be < input_dim = " + std::to_string(input_dim));
+  }
+  Eigen::MatrixXd matrix(const EncodingOptions& o, int input_dim) const override {
+    if (o.axis >= input_dim)
+      reject("axis", std::to_string(o.axis),
+             "must be < the input dimension " + std::to_string(input_dim));
+    Eigen::MatrixXd b = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(o.at.size()), input_dim);
+    b.col(o.axis).setOnes();
+    return b;
+  }
+  template <typename Scalar>
+  static std::unique_ptr<autodiff::Module<Scalar>> make(const EncodingOptions& o, int input_dim) {
+    const Eigen::MatrixXd b = CuspType().matrix(o, input_dim);
+    return std::make_unique<FeatureEncoding<Scalar>>(
+        b, -Eigen::Map<const Eigen::VectorXd>(o.at.data(), b.rows()),
+        std::make_unique<Abs<Scalar>>(), true);
+  }
+  void read(const io::ConfigNode& e, const EncodingContext& context,
+            EncodingOptions& o) const override {
+    const std::vector<std::string> axes = names_or_default(context.input_names, context.input_dim);
+    const std::string axis = e.get_choice("axis", axes);
+    o.axis = static_cast<int>(std::find(axes.begin(), axes.end(), axis) - axes.begin());
+    o.at = e.get<std::vector<double>>("at");
+    e.require("at", !o.at.empty(), "expected a non-empty list of plane positions");
+    for (double c : o.at) e.require("at", std::isfinite(c), "expected finite numbers");
+    if (e.has("from_stage")) o.from_stage = e.get_in_range("from_stage", 0, 1000);
+  }
+  void write(const EncodingOptions& o, const EncodingContext& context,
+             YAML::Node& n) const override {
+    n["axis"] = names_or_default(context.input_names, context.input_dim).at(o.axis);
+    n["at"] = o.at;
+    if (o.from_stage > 0) n["from_stage"] = o.from_stage;
+  }
+  void save(io::H5Writer& file, const std::string& group,
+            const EncodingOptions& o) const override {
+    file.write_attribute(group, "encoding_axis", o.axis);
+    file.write_attribute(group, "encoding_at", std::span<const double>(o.at));
+    file.write_attribute(group, "encoding_from_stage", static_cast<std::int64_t>(o.from_stage));
+  }
+  void load(const io::H5Reader& file, const std::string& group,
+            EncodingOptions& o) const override {
+    if (file.has_attribute(group, "encoding_axis"))
+      o.axis = static_cast<int>(file.read_attribute<std::int64_t>(group, "encoding_axis"));
+    if (file.has_attribute(group, "encoding_at"))
+      o.at = file.read_attribute<std::vector<double>>(group, "encoding_at");
+    if (file.has_attribute(group, "encoding_from_stage"))
+      o.from_stage = static_cast<int>(file.read_attribute<std::int64_t>(group, "encoding_from_stage"));
+  }
+};
+
+using EncodingRegistry = Registry<std::unique_ptr<const EncodingType>>;
+
+const EncodingRegistry& encodings() {
+  static const EncodingRegistry registry = [] {
+    EncodingRegistry r("encoding");
+    r.add("identity", std::make_unique<IdentityType>());
+    r.add("positional", std::make_unique<PositionalType>());
+    r.add("fourier", std::make_unique<FourierType>());
+    r.add("cusp", std::make_unique<CuspType>());
+    r.add("hash_grid", make_hash_grid_type());
+    return r;
+  }();
+  return registry;
+}
+
+}  // namespace
+
+const EncodingType& encoding_type(std::string_view name) { return *encodings().at(name); }
+
+std::vector<std::string> encoding_names() { return encodings().names(); }
+
+void EncodingOptions::validate() const {
+  const EncodingType& kind = encoding_type(type);
+  kind.validate(*this);
+  if (from_stage < 0) reject("from_stage", std::to_string(from_stage), "must be >= 0");
+  if (from_stage > 0 && !kind.can_enter_late())
+    reject("from_stage", std::to_string(from_stage),
+           "only cusp features can enter at a later stage");
+}
+
+void EncodingOptions::validate(int input_dim) const {
+  validate();
+  if (lower.size() != upper.size() || (!lower.empty() && static_cast<int>(lower.size()) != input_dim))
+    throw std::invalid_argument("encoding.lower/upper have " + std::to_string(lower.size()) + " and " +
+                                std::to_string(upper.size()) +
+                                " values: must both be empty or have one per input, " +
+                                std::to_string(input_dim));
+  for (size_t i = 0; i < lower.size(); ++i)
+    if (!(std::isfinite(lower[i]) && std::isfinite(upper[i]) && lower[i] < upper[i]))
+      reject("lower[" + std::to_string(i) + "]", std::to_string(lower[i]),
+             "must be finite and below upper[" + std::to_string(i) + "] = " +
+                 std::to_string(upper[i]));
+  encoding_type(type).validate_inputs(*this, input_dim);
+}
+
+Eigen::MatrixXd encoding_matrix(const EncodingOptions& options, int input_dim) {
+  options.validate();
+  return encoding_type(options.type).matrix(options, input_dim);
+}
+
+template <typename Scalar>
+std::unique_ptr<autodiff::Module<Scalar>> make_encoding(const EncodingOptions& options,
+                                                        int input_dim) {
+  options.validate(input_dim);
+  const EncodingType& kind = encoding_type(options.type);
+  if constexpr (std::is_same_v<Scalar, float>)
+    return kind.make_float(options, input_dim);
+  else
+    return kind.make_double(options, input_dim);
+}
+
+template std::unique_ptr<autodiff::Module<float>> make_encoding<float>(const EncodingOptions&, int);
+template std::unique_ptr<autodiff::Module<double>> make_encoding<double>(const EncodingOptions&, int);
+
+}  // namespace nfield::fields

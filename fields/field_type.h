@@ -1,0 +1,90 @@
+// SPDX-License-Identifier: MIT
+//
+// One registered field type: everything the program does that depends on `field.type`. The
+// registry (field_type(), fields/field_types.cc) maps each name, case-insensitively, to one
+// of these; siren, mlp and nerf are registered there, and code outside the library adds its
+// own with register_field_type. An unknown name is an UnknownNameError listing the valid
+// names.
+#pragma once
+
+#include <yaml-cpp/yaml.h>
+
+#include <memory>
+#include <string>
+#include <string_view>
+
+#include "autodiff/sequential.h"
+#include "fields/encodings.h"
+#include "fields/field_options.h"
+#include "io/config.h"
+#include "io/hdf5_file.h"
+
+namespace nfield::fields {
+
+// Uniform initial weights in [−weight, weight] and biases in [−bias, bias] (0: zero).
+struct InitialBounds {
+  double weight = 0;
+  double bias = 0;
+};
+
+class FieldType {
+ public:
+  virtual ~FieldType() = default;
+
+  // The activation when `activation` is not given (also the config reader's default).
+  virtual std::string default_activation() const = 0;
+  // Whether `activation` is one of the type's keys (siren's layers are sines whatever it says).
+  virtual bool has_activation() const { return true; }
+  // The type's own rules of FieldOptions::validate; std::invalid_argument naming the option
+  // ("field.KEY = VALUE: rule").
+  virtual void validate(const FieldOptions&) const {}
+  // The inputs the encoding sees (a radiance field encodes the position, not the direction).
+  virtual int encoded_inputs(const FieldOptions& options) const { return options.input_dim; }
+
+  // Appends the type's modules to `network` (empty on entry); options are validated, the
+  // activation resolved. Returns the encoding whose features enter at a later stage
+  // (encoding.from_stage > 0), in `network`, or nullptr.
+  virtual FeatureEncoding<float>* append_modules(const FieldOptions& options,
+                                                 autodiff::Sequential<float>& network) const = 0;
+  virtual FeatureEncoding<double>* append_modules(const FieldOptions& options,
+                                                  autodiff::Sequential<double>& network) const = 0;
+  // The initialization of dense layer `index` (0-based over the dense layers) of `in` inputs
+  // and `out` outputs. By default He-uniform weights for relu, Xavier-uniform otherwise,
+  // zero biases.
+  virtual InitialBounds initial_bounds(const FieldOptions& options, int index, Eigen::Index in,
+                                       Eigen::Index out) const;
+
+  // Reads the type's keys of `field:` (`type`, `hidden`, `activation` and the keys every
+  // field has are read elsewhere); errors are io::ConfigError at the key.
+  virtual void read(const io::ConfigNode&, FieldOptions&) const {}
+  // Writes them back for the resolved config.
+  virtual void write(const FieldOptions&, YAML::Node&) const {}
+  // Checkpoint attributes of the field's group beyond those every field has
+  // (fields/field_io.h).
+  virtual void save(io::H5Writer&, const std::string& /*group*/, const FieldOptions&) const {}
+  virtual void load(const io::H5Reader&, const std::string& /*group*/, FieldOptions&) const {}
+};
+
+// Implements append_modules from Derived's static member template
+// `template <typename Scalar> static FeatureEncoding<Scalar>* append(const FieldOptions&,
+//      autodiff::Sequential<Scalar>&)`.
+template <class Derived>
+class FieldTypeOf : public FieldType {
+ public:
+  FeatureEncoding<float>* append_modules(const FieldOptions& options,
+                                         autodiff::Sequential<float>& network) const final {
+    return Derived::template append<float>(options, network);
+  }
+  FeatureEncoding<double>* append_modules(const FieldOptions& options,
+                                          autodiff::Sequential<double>& network) const final {
+    return Derived::template append<double>(options, network);
+  }
+};
+
+// The registered type of `name` (case-insensitive); UnknownNameError otherwise.
+const FieldType& field_type(std::string_view name);
+
+// Adds a field type (`field.type: NAME`). Throws std::logic_error if the name is taken.
+void register_field_type(std::string_view name, std::unique_ptr<const FieldType> type);
+
+}  // namespace nfield::fields
