@@ -425,9 +425,6 @@ TEST(NerfBenchTest, PrintsTheFiguresTheComparisonReads) {
 
 INSTANTIATE_TEST_SUITE_P(Precisions, OutputsTest, ::testing::Values("double", "float"));
 
-}  // namespace
-}  // namespace nfield::apps::testing
-
 // nfield run on an audio integrand in a tiny setting: the outputs an AutoInt run promises are
 // written (the curves, the integral and timing metrics), whatever the figures.
 TEST(AutoIntRunTest, WritesCurvesAndIntegralMetrics) {
@@ -455,3 +452,6 @@ TEST(AutoIntRunTest, WritesCurvesAndIntegralMetrics) {
   }
   EXPECT_GE(metrics["quadrature_evaluations_per_integral"].get<double>(), 15);
 }
+
+}  // namespace
+}  // namespace nfield::apps::testing
