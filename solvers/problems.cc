@@ -11,6 +11,7 @@ void register_problems(Registry<ProblemFactory>& registry) {
   registry.add("eikonal", make_eikonal);
   registry.add("sdf", make_sdf);
   registry.add("nerf", make_nerf);
+  registry.add("autoint_nerf", make_autoint_nerf);
 }
 
 namespace {
