@@ -423,6 +423,36 @@ TEST(NerfBenchTest, PrintsTheFiguresTheComparisonReads) {
   EXPECT_NE(o.err.find("needs a radiance field"), std::string::npos) << o.err;
 }
 
+// nfield bench --autoint in a tiny setting (half a second of training per run, small
+// networks): the table and one JSON line per run come out, and the JSON file holds the same
+// rows. No figure is asserted beyond the reference's own speed-up of 1.
+TEST(AutointBenchTest, PrintsTheTableAndWritesItsRows) {
+  const auto dir = scratch_dir();
+  Outcome o = run_nfield({"bench", "--autoint", "--seconds", "0.5", "--sections", "2", "3", "--nerf-samples", "8",
+                          "--no-grid", "--set", "field.hidden=[8]", "--set", "field.color_hidden=[4]", "--set",
+                          "training.batch.rays=32", "--autoint-config", NFIELD_SOURCE_DIR "/configs/autoint_bunny.yaml",
+                          "--nerf-config", NFIELD_SOURCE_DIR "/configs/nerf_bunny_quadrature.yaml", "--autoint-out",
+                          (dir / "out").string()},
+                         dir, dir / "capture");
+  ASSERT_EQ(o.code, 0) << describe(o);
+  EXPECT_NE(o.out.find("test PSNR"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("speed-up"), std::string::npos) << o.out;
+  std::vector<std::string> runs;
+  for (size_t at = o.out.find("{\"bench\":\"autoint\""); at != std::string::npos;
+       at = o.out.find("{\"bench\":\"autoint\"", at + 1)) {
+    const nlohmann::json row = nlohmann::json::parse(o.out.substr(at, o.out.find('\n', at) - at));
+    runs.push_back(row["run"]);
+    for (const char* key : {"psnr_mean", "render_ms", "speedup", "psnr_loss_db", "steps"})
+      EXPECT_TRUE(row.contains(key)) << key;
+    if (row["run"] == "nerf_quadrature") EXPECT_EQ(row["speedup"].get<double>(), 1.0);
+  }
+  EXPECT_EQ(runs, (std::vector<std::string>{"nerf_quadrature", "autoint_2", "autoint_3"}));
+  const nlohmann::json written = read_json(dir / "out" / "autoint_bench.json");
+  ASSERT_EQ(written.size(), 3u);
+  EXPECT_EQ(written[2]["evaluations_per_ray"].get<int>(), 4);
+  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "autoint_3" / "test_views" / "test_000_render.png"));
+}
+
 INSTANTIATE_TEST_SUITE_P(Precisions, OutputsTest, ::testing::Values("double", "float"));
 
 }  // namespace
