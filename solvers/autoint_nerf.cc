@@ -259,13 +259,7 @@ class AutointNerf final : public Problem {
           means.row(k * sections_ + i) =
               (phi.row(k * ends + i + 1) - phi.row(k * ends + i)) / sections.delta(k * sections_ + i);
       means.col(0) *= density_scale_;
-      const Shading shading = shade(means, density_);
-      const auto result = integrators::render<double>(sections, shading.sigma, shading.rgb, background.transpose());
-      View view;
-      view.rgb = result.color.cast<float>();
-      view.opacity = result.opacity.cast<float>();
-      view.depth = (result.depth.array() / result.opacity.array().max(1e-6)).cast<float>();
-      return view;
+      return composite(sections, shade(means, density_), background);
     };
   }
 

@@ -330,13 +330,7 @@ class Nerf final : public Problem {
       RaySamples<double> samples = grid ? grid->march(rays, occupancy_.march)
                                         : integrators::stratified_samples(rays, {samples_, false}, unused);
       if (!grid && importance_ > 0) samples = refined(context.values, rays, samples, background, true, unused);
-      const Shading shading = shade(context.values(sample_inputs(rays, samples)), density_);
-      const auto result = integrators::render<double>(samples, shading.sigma, shading.rgb, background.transpose());
-      View view;
-      view.rgb = result.color.cast<float>();
-      view.opacity = result.opacity.cast<float>();
-      view.depth = (result.depth.array() / result.opacity.array().max(1e-6)).cast<float>();
-      return view;
+      return composite(samples, shade(context.values(sample_inputs(rays, samples)), density_), background);
     };
   }
 

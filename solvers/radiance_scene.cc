@@ -10,6 +10,7 @@
 #include <Eigen/Geometry>
 
 #include "integrators/multiview_dataset.h"
+#include "integrators/volume_rendering.h"
 #include "io/image_metrics.h"
 #include "io/png_image.h"
 
@@ -51,6 +52,15 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 }
 
 }  // namespace
+
+View composite(const integrators::RaySamples<double>& samples, const Shading& shading, const Eigen::Vector3d& background) {
+  const auto result = integrators::render<double>(samples, shading.sigma, shading.rgb, background.transpose());
+  View view;
+  view.rgb = result.color.cast<float>();
+  view.opacity = result.opacity.cast<float>();
+  view.depth = (result.depth.array() / result.opacity.array().max(1e-6)).cast<float>();
+  return view;
+}
 
 RadianceScene::RadianceScene(const ProblemContext& context) : domain_(scene_domain(context.root.child("scene"))) {
   const io::ConfigNode scene = context.root.child("scene");

@@ -20,6 +20,7 @@
 #include "integrators/camera.h"
 #include "integrators/multiview_dataset.h"
 #include "integrators/ray_batch.h"
+#include "integrators/ray_sampling.h"
 #include "integrators/scene_box.h"
 #include "solvers/problem.h"
 
@@ -61,6 +62,10 @@ struct View {
   Eigen::VectorXf opacity;  // pixels
   Eigen::VectorXf depth;    // pixels: expected distance given a hit
 };
+
+// The rays of `samples` rendered with `shading` on `background` (1 × 3): colour, opacity and
+// expected distance given a hit.
+View composite(const integrators::RaySamples<double>& samples, const Shading& shading, const Eigen::Vector3d& background);
 
 // Rays clipped to the scene box (near bound applied), rendered on `background`.
 using RenderRays = std::function<View(const integrators::Rays<double>& rays, const Eigen::Vector3d& background)>;

@@ -19,6 +19,7 @@
 #include "io/png_image.h"
 #include "solvers/run.h"
 #include "tests/testing/config_errors.h"
+#include "tests/testing/ray_residual_checks.h"
 #include "tests/testing/scratch.h"
 
 namespace nfield::solvers {
@@ -146,45 +147,11 @@ TEST(AutointNerf, SectionResidualAdjointMatchesCentralDifferences) {
   ASSERT_EQ(layout.count(), 2);
 
   std::mt19937_64 engine(7);
-  auto uniform = [&engine] { return static_cast<double>(engine() >> 11) * 0x1.0p-53 - 0.5; };
-  Streams<double> out;
-  out.resize(points.x.rows(), 2, 4);
-  for (Eigen::Index i = 0; i < out.data.size(); ++i) out.data.data()[i] = 6 * uniform();
-  Eigen::MatrixXd r_bar(12, 3), r;
-  for (Eigen::Index i = 0; i < r_bar.size(); ++i) r_bar.data()[i] = uniform();
-  Streams<double> adjoint;
-  adjoint.resize(out.points, 2, 4);
-  adjoint.data.setZero();
-  residual->evaluate(0, layout, out, r);
-  ASSERT_EQ(r.rows(), 12);
-  residual->backward(0, layout, out, r_bar, adjoint);
+  const Streams<double> out = testutil::random_streams(points.x.rows(), 2, 4, 6.0, engine);
+  const Streams<double> adjoint = testutil::expect_ray_residual_adjoint(*residual, layout, out, points.groups, 5, engine);
   // Φ itself is not read in training: only its rate along the ray.
   EXPECT_EQ(adjoint.stream(0).norm(), 0.0);
   EXPECT_GT(adjoint.stream(1).norm(), 0.0);
-
-  Eigen::MatrixXd v(out.data.rows(), 4);
-  for (Eigen::Index i = 0; i < v.size(); ++i) v.data()[i] = uniform();
-  auto objective = [&](double h) {
-    Streams<double> moved = out;
-    moved.data += h * v;
-    Eigen::MatrixXd rh;
-    residual->evaluate(0, layout, moved, rh);
-    return (r_bar.array() * rh.array()).sum();
-  };
-  const double h = 1e-6, fd = (objective(h) - objective(-h)) / (2 * h);
-  const double reverse = (adjoint.data.array() * v.array()).sum();
-  EXPECT_NEAR(reverse, fd, 1e-7 * (1 + std::abs(fd)));
-
-  // The rows of the rays in a block do not depend on where the block starts.
-  const Eigen::Index cut = points.groups[5];
-  Streams<double> tail;
-  tail.resize(out.points - cut, 2, 4);
-  tail.stream(0) = out.stream(0).bottomRows(out.points - cut);
-  tail.stream(1) = out.stream(1).bottomRows(out.points - cut);
-  Eigen::MatrixXd r_tail;
-  residual->evaluate(cut, layout, tail, r_tail);
-  ASSERT_EQ(r_tail.rows(), 7);
-  EXPECT_EQ(r_tail, r.bottomRows(7));
 }
 
 TEST(AutointNerf, ConfigErrorsAreLocated) {
