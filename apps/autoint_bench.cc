@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "apps/autoint_bench.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -50,11 +51,15 @@ int run_autoint_bench(const AutointBenchOptions& options) {
                   {}});
   if (options.with_grid)
     runs.push_back({"nerf_grid", 0, 0, solvers::load_run(options.grid_config, with({}), options.out / "nerf_grid"), {}});
-  for (int k : options.sections)
+  for (int k : options.sections) {
+    const long per_section = std::max(1L, std::lround(static_cast<double>(options.samples_per_ray) / k));
     runs.push_back({"autoint_" + std::to_string(k), k, k + 1,
-                    solvers::load_run(options.autoint_config, with({"render.sections=" + std::to_string(k)}),
+                    solvers::load_run(options.autoint_config,
+                                      with({"render.sections=" + std::to_string(k),
+                                            "render.samples_per_section=" + std::to_string(per_section)}),
                                       options.out / ("autoint_" + std::to_string(k))),
                     {}});
+  }
   for (size_t r = 0; r < runs.size(); ++r) {
     std::printf("== %s (%zu/%zu, %.0f s of training): %s\n", runs[r].name.c_str(), r + 1, runs.size(),
                 options.seconds, runs[r].setup.config_path.string().c_str());

@@ -8,7 +8,8 @@
 //                     rendering (configs/nerf_bunny_quadrature.yaml): the reference
 //   nerf_grid         optionally NeRF marched through its occupancy grid
 //                     (configs/nerf_bunny.yaml), with and without the grid at render time
-//   autoint_K         configs/autoint_bunny.yaml with render.sections = K, for each K
+//   autoint_K         configs/autoint_bunny.yaml with render.sections = K, for each K, and
+//                     render.samples_per_section = samples_per_ray / K (at least 1)
 //
 // and renders each one's test views (`nfield run`'s outputs under OUT/RUN). Prints a table:
 // field evaluations per ray, training steps, mean test PSNR, ms to render a frame, the
@@ -33,6 +34,9 @@ struct AutointBenchOptions {
   std::vector<int> sections{4, 8, 16, 32};
   double seconds = 120;     // of training, each run
   int nerf_samples = 128;   // samples per ray of the reference
+  // AutoInt's training samples per ray: K sections get max(1, round(this / K)) samples each
+  // (render.samples_per_section), so that every K trains at about the same cost a step.
+  int samples_per_ray = 64;
   bool with_grid = true;    // also train and time the occupancy-grid NeRF
   std::filesystem::path out = "out/autoint_bench";
   std::vector<std::string> overrides;  // --set, applied to every run's config

@@ -257,6 +257,10 @@ void add_bench_command(CLI::App& app) {
   bench->add_option("--nerf-samples", autoint->nerf_samples, "--autoint: samples per ray of the NeRF reference")
       ->check(CLI::Range(1, 4096))
       ->capture_default_str();
+  bench->add_option("--train-samples", autoint->samples_per_ray,
+                    "--autoint: AutoInt training samples per ray, spread over the K sections")
+      ->check(CLI::Range(1, 65536))
+      ->capture_default_str();
   bench->add_option("--autoint-config", autoint->autoint_config, "--autoint: the AutoInt config")
       ->check(CLI::ExistingFile)
       ->capture_default_str();
