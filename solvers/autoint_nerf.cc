@@ -118,7 +118,7 @@ class SectionColourResidual final : public Residual {
     size_t k0 = 0, k1 = 0;
     Eigen::Index samples_begin = 0;  // row of the block's first sample in `out`
     RaySamples<double> sections;
-    Eigen::MatrixXd means;  // sections × 4: s̄
+    Eigen::MatrixXd means;  // sections × 4: s̄, the density column times λ
     Shading shading;
     Eigen::MatrixXd background;
   };
