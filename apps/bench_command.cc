@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "apps/accuracy_bench.h"
+#include "apps/autoint_bench.h"
 #include "apps/gemm_rate.h"
 #include "apps/nerf_bench.h"
 #include "fields/field.h"
@@ -218,7 +219,8 @@ void add_bench_command(CLI::App& app) {
   bench->add_option("--out", accuracy->out, "--accuracy: output folder, one subfolder per case")
       ->capture_default_str();
   bench->add_option("--set", accuracy->overrides,
-                    "--accuracy, --nerf: override a value in every case's config, or in the --nerf config");
+                    "--accuracy, --nerf, --autoint: override a value in every case's config, in the --nerf "
+                    "config, or in every --autoint run's config");
 
   auto nerf = std::make_shared<NerfBenchOptions>();
   auto nerf_flag = std::make_shared<bool>(false);
@@ -239,7 +241,50 @@ void add_bench_command(CLI::App& app) {
   bench->add_option("--render-repeats", nerf->render_repeats, "--nerf: timed renders of the test view")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
-  bench->callback([bench, options, accuracy, accuracy_flag, nerf, nerf_flag] {
+  auto autoint = std::make_shared<AutointBenchOptions>();
+  auto autoint_flag = std::make_shared<bool>(false);
+  bench->add_flag("--autoint", *autoint_flag,
+                  "Train AutoInt volume rendering at K sections per ray and NeRF quadrature for the same "
+                  "time each, then compare test PSNR and render time per frame")
+      ->excludes("--accuracy")
+      ->excludes("--nerf");
+  bench->add_option("--seconds", autoint->seconds, "--autoint: seconds of training per run")
+      ->check(CLI::Range(0.1, 1e6))
+      ->capture_default_str();
+  bench->add_option("--sections", autoint->sections, "--autoint: the section counts K to train")
+      ->check(CLI::Range(1, 4096))
+      ->capture_default_str();
+  bench->add_option("--nerf-samples", autoint->nerf_samples, "--autoint: samples per ray of the NeRF reference")
+      ->check(CLI::Range(1, 4096))
+      ->capture_default_str();
+  bench->add_option("--train-samples", autoint->samples_per_ray,
+                    "--autoint: AutoInt training samples per ray, spread over the K sections")
+      ->check(CLI::Range(1, 65536))
+      ->capture_default_str();
+  bench->add_option("--autoint-config", autoint->autoint_config, "--autoint: the AutoInt config")
+      ->check(CLI::ExistingFile)
+      ->capture_default_str();
+  bench->add_option("--nerf-config", autoint->nerf_config, "--autoint: the NeRF reference config (no occupancy grid)")
+      ->check(CLI::ExistingFile)
+      ->capture_default_str();
+  bench->add_option("--grid-config", autoint->grid_config, "--autoint: the NeRF config with an occupancy grid")
+      ->check(CLI::ExistingFile)
+      ->capture_default_str();
+  auto no_grid = std::make_shared<bool>(false);
+  bench->add_flag("--no-grid", *no_grid, "--autoint: leave out the occupancy-grid NeRF");
+  auto autoint_out = std::make_shared<std::filesystem::path>(autoint->out);
+  bench->add_option("--autoint-out", *autoint_out, "--autoint: output folder, one subfolder per run")
+      ->capture_default_str();
+  bench->callback([bench, options, accuracy, accuracy_flag, nerf, nerf_flag, autoint, autoint_flag, no_grid,
+                   autoint_out] {
+    if (*autoint_flag) {
+      autoint->with_grid = !*no_grid;
+      autoint->out = *autoint_out;
+      autoint->overrides = accuracy->overrides;
+      const int code = run_autoint_bench(*autoint);
+      if (code != 0) throw CLI::RuntimeError(code);
+      return;
+    }
     if (*nerf_flag) {
       // Steps of a radiance field are long and vary with the rays drawn: more of them by default.
       if (bench->count("--steps") > 0) nerf->steps = options->steps;

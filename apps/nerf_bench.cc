@@ -135,6 +135,11 @@ void run_nerf_bench(const NerfBenchOptions& options) {
 
   // The trainer's loss terms and batch sizes (solvers/trainer.cc: resample, term_loss).
   const std::vector<solvers::LossTerm> terms = setup.problem->loss_terms();
+  for (const solvers::LossTerm& term : terms)
+    if (term.spec.tangents.cols() > 0)
+      throw CLI::ValidationError("--config", options.config.string() + " trains derivative streams (loss term '" +
+                                                 term.name + "'); --nerf times NeRF's quadrature (for problem: "
+                                                 "autoint_nerf use --autoint)");
   std::vector<autodiff::StreamLayout> layouts;
   std::vector<Eigen::Index> batch;
   long rays = 0;

@@ -48,17 +48,23 @@ class Abs final : public autodiff::ElementwiseFunction<Scalar> {
   }
 };
 
-// γ(x) = [x if include_input, sin(x Bᵀ), cos(x Bᵀ)] as one sine over [B; B] with phases
-// [0; π/2].
+// γ(x) = [x if include_input, s ⊙ sin(x Bᵀ), s ⊙ cos(x Bᵀ)] as one sine over [B; B] with
+// phases [0; π/2]; s (one per row of B) empty: all 1.
 template <typename Scalar>
-std::unique_ptr<autodiff::Module<Scalar>> sinusoids(const Eigen::MatrixXd& b, bool include_input) {
+std::unique_ptr<autodiff::Module<Scalar>> sinusoids(const Eigen::MatrixXd& b, bool include_input,
+                                                    const Eigen::VectorXd& scales = {}) {
   const Eigen::Index m = b.rows();
   Eigen::MatrixXd doubled(2 * m, b.cols());
   doubled << b, b;
   Eigen::VectorXd phase(2 * m);
   phase << Eigen::VectorXd::Zero(m), Eigen::VectorXd::Constant(m, std::numbers::pi / 2);
+  Eigen::VectorXd doubled_scales;
+  if (scales.size() > 0) {
+    doubled_scales.resize(2 * m);
+    doubled_scales << scales, scales;
+  }
   return std::make_unique<FeatureEncoding<Scalar>>(
-      doubled, phase, make_activation<Scalar>({"sine", 1.0}), include_input);
+      doubled, phase, make_activation<Scalar>({"sine", 1.0}), include_input, doubled_scales);
 }
 
 class IdentityType final : public EncodingTypeOf<IdentityType> {
@@ -81,17 +87,34 @@ class PositionalType final : public EncodingTypeOf<PositionalType> {
       for (int i = 0; i < input_dim; ++i) b(l * input_dim + i, i) = std::ldexp(std::numbers::pi, l);
     return b;
   }
+  // normalize: octave l scaled by 2⁻ˡ, so that every feature's derivative is at most π
+  // (AutoInt, Lindell et al. 2021: a network trained through its derivative along a ray
+  // otherwise sees the high octaves amplified by 2ˡ).
   template <typename Scalar>
   static std::unique_ptr<autodiff::Module<Scalar>> make(const EncodingOptions& o, int input_dim) {
-    return sinusoids<Scalar>(PositionalType().matrix(o, input_dim), o.include_input);
+    Eigen::VectorXd scales;
+    if (o.normalize) {
+      scales.resize(o.frequencies * input_dim);
+      for (int l = 0; l < o.frequencies; ++l) scales.segment(l * input_dim, input_dim).setConstant(std::ldexp(1.0, -l));
+    }
+    return sinusoids<Scalar>(PositionalType().matrix(o, input_dim), o.include_input, scales);
   }
   void read(const io::ConfigNode& e, const EncodingContext&, EncodingOptions& o) const override {
     if (e.has("frequencies")) o.frequencies = e.get_in_range("frequencies", 1, 24);
     o.include_input = e.get_or("include_input", true);
+    o.normalize = e.get_or("normalize", false);
   }
   void write(const EncodingOptions& o, const EncodingContext&, YAML::Node& n) const override {
     n["frequencies"] = o.frequencies;
     n["include_input"] = o.include_input;
+    if (o.normalize) n["normalize"] = true;
+  }
+  void save(io::H5Writer& file, const std::string& group, const EncodingOptions& o) const override {
+    if (o.normalize) file.write_attribute(group, "encoding_normalize", std::int64_t{1});
+  }
+  void load(const io::H5Reader& file, const std::string& group, EncodingOptions& o) const override {
+    o.normalize = file.has_attribute(group, "encoding_normalize") &&
+                  file.read_attribute<std::int64_t>(group, "encoding_normalize") != 0;
   }
 };
 

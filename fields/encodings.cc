@@ -11,13 +11,16 @@ template <typename Scalar>
 FeatureEncoding<Scalar>::FeatureEncoding(const Eigen::MatrixXd& weights,
                                          const Eigen::VectorXd& offsets,
                                          std::unique_ptr<autodiff::ElementwiseFunction<Scalar>> function,
-                                         bool include_input)
+                                         bool include_input, const Eigen::VectorXd& scales)
     : weights_(weights.cast<Scalar>()),
       offsets_(offsets.transpose().cast<Scalar>()),
+      scales_(scales.transpose().cast<Scalar>()),
       function_(std::move(function)),
       include_input_(include_input) {
   if (offsets.size() != weights.rows())
     throw std::logic_error("FeatureEncoding: one offset per row of the weights expected");
+  if (scales.size() != 0 && scales.size() != weights.rows())
+    throw std::logic_error("FeatureEncoding: one scale per row of the weights expected");
 }
 
 // saved = [z streams (one matrix), derivative tables …]
@@ -45,6 +48,8 @@ void FeatureEncoding<Scalar>::forward(const autodiff::StreamLayout& layout, cons
   out.resize(in.points, in.count, d + y.width());
   if (d > 0) out.data.leftCols(d) = in.data;
   out.data.rightCols(y.width()) = y.data;
+  // Every stream is linear in the feature, so the scale multiplies each stream alike.
+  if (scales_.size() > 0) out.data.rightCols(y.width()).array().rowwise() *= scales_.row(0).array();
   if (saved) {
     saved->resize(1 + tables.size());
     (*saved)[0] = z.data;
@@ -76,6 +81,7 @@ void FeatureEncoding<Scalar>::backward(const autodiff::StreamLayout& layout, con
   tables.assign(saved.begin() + 1, saved.end());
   y_adjoint.resize(in.points, in.count, weights_.rows());
   y_adjoint.data = out_adjoint.data.rightCols(weights_.rows());
+  if (scales_.size() > 0) y_adjoint.data.array().rowwise() *= scales_.row(0).array();
   autodiff::elementwise_backward(layout, tables, z, y_adjoint, z_adjoint);
   in_adjoint->resize(in.points, in.count, in.width());
   in_adjoint->data.noalias() = z_adjoint.data * weights_;

@@ -53,6 +53,7 @@ struct EncodingOptions {
   std::string type = "identity";  // a registered name (encoding_names())
   int frequencies = 6;            // positional: L, frequencies 2⁰π … 2^(L−1)π per axis
   bool include_input = true;      // positional, hash_grid: keep x itself in γ(x)
+  bool normalize = false;         // positional: octave l scaled by 2⁻ˡ (derivatives bounded)
   int features = 128;             // fourier: m
   double scale = 10.0;            // fourier: σ
   std::uint64_t seed = 0;         // fourier: draws B
@@ -88,13 +89,14 @@ template <typename Scalar>
 std::unique_ptr<autodiff::Module<Scalar>> make_encoding(const EncodingOptions& options,
                                                         int input_dim);
 
-// γ(x) = [x if include_input, σ(x Wᵀ + b)] with a fixed W (m × d), b (m) and σ.
+// γ(x) = [x if include_input, s ⊙ σ(x Wᵀ + b)] with a fixed W (m × d), b (m), σ and
+// feature scales s (m; empty: all 1).
 template <typename Scalar>
 class FeatureEncoding final : public autodiff::Module<Scalar> {
  public:
   FeatureEncoding(const Eigen::MatrixXd& weights, const Eigen::VectorXd& offsets,
                   std::unique_ptr<autodiff::ElementwiseFunction<Scalar>> function,
-                  bool include_input);
+                  bool include_input, const Eigen::VectorXd& scales = {});
 
   std::string name() const override { return "feature encoding"; }
   Eigen::Index input_width() const override { return weights_.cols(); }
@@ -116,6 +118,7 @@ class FeatureEncoding final : public autodiff::Module<Scalar> {
  private:
   autodiff::Matrix<Scalar> weights_;  // m × d
   autodiff::Matrix<Scalar> offsets_;  // 1 × m
+  autodiff::Matrix<Scalar> scales_;   // 1 × m, or empty
   std::shared_ptr<autodiff::ElementwiseFunction<Scalar>> function_;
   bool include_input_;
   bool features_on_ = true;

@@ -115,6 +115,32 @@ RaySamples<Scalar> stratified_samples(const Rays<Scalar>& rays, const Stratified
 }
 
 template <typename Scalar>
+RaySamples<Scalar> equal_sections(const Rays<Scalar>& rays, int sections) {
+  if (sections < 1) throw std::invalid_argument("equal_sections: sections = " + std::to_string(sections) + ": must be >= 1");
+  RaySamples<Scalar> out;
+  out.offsets.assign(rays.size() + 1, 0);
+  for (Eigen::Index r = 0; r < rays.size(); ++r) {
+    const double near = rays.near(r), far = rays.far(r);
+    if (!std::isfinite(near) || !std::isfinite(far))
+      throw std::invalid_argument("equal_sections: ray " + std::to_string(r) + " has [near, far] = [" +
+                                  std::to_string(near) + ", " + std::to_string(far) +
+                                  "]: both must be finite (set_bounds or clip_to_box)");
+    out.offsets[r + 1] = out.offsets[r] + (far > near ? sections : 0);
+  }
+  out.t.resize(out.offsets.back());
+  out.delta.resize(out.offsets.back());
+  for (Eigen::Index r = 0; r < rays.size(); ++r) {
+    if (out.count(r) == 0) continue;
+    const double near = rays.near(r), length = (double(rays.far(r)) - near) / sections;
+    for (Eigen::Index i = 0; i < sections; ++i) {
+      out.t(out.begin(r) + i) = static_cast<Scalar>(near + (i + 0.5) * length);
+      out.delta(out.begin(r) + i) = static_cast<Scalar>(length);
+    }
+  }
+  return out;
+}
+
+template <typename Scalar>
 RaySamples<Scalar> importance_samples(const Rays<Scalar>& rays, const RaySamples<Scalar>& coarse,
                                       const ConstVectorRef<Scalar>& weights,
                                       const ImportanceOptions& options, std::mt19937_64& rng) {
@@ -178,6 +204,7 @@ RaySamples<Scalar> importance_samples(const Rays<Scalar>& rays, const RaySamples
   template Matrix<Scalar> sample_directions(const Rays<Scalar>&, const RaySamples<Scalar>&); \
   template RaySamples<Scalar> stratified_samples(const Rays<Scalar>&, const StratifiedOptions&, \
                                                  std::mt19937_64&);                         \
+  template RaySamples<Scalar> equal_sections(const Rays<Scalar>&, int);                        \
   template RaySamples<Scalar> importance_samples<Scalar>(const Rays<Scalar>&, const RaySamples<Scalar>&, \
                                                  const ConstVectorRef<Scalar>&, const ImportanceOptions&, \
                                                  std::mt19937_64&);

@@ -81,6 +81,15 @@ template <typename Scalar>
 RaySamples<Scalar> stratified_samples(const Rays<Scalar>& rays, const StratifiedOptions& options,
                                       std::mt19937_64& rng);
 
+// `sections` equal sections of each ray's [near, far] (none for an empty interval), each as
+// one sample at its midpoint standing for its whole length: t = near + (i + ½)Δ, δ = Δ =
+// (far − near)/sections for every section, the last one included (unlike stratified
+// midpoints, whose last δ ends at far). Piecewise-constant integrals over sections (AutoInt)
+// render with these. Throws std::invalid_argument for sections < 1 or a ray without finite
+// bounds.
+template <typename Scalar>
+RaySamples<Scalar> equal_sections(const Rays<Scalar>& rays, int sections);
+
 struct ImportanceOptions {
   int samples_per_ray = 128;  // fine samples drawn per ray that has coarse samples; ≥ 1
   // true: u at the midpoints (k + ½)/n (evaluation); false: u = (k + ξₖ)/n, one uniform ξ per

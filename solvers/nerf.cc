@@ -58,8 +58,6 @@
 #include <fstream>
 #include <numbers>
 
-#include <Eigen/Geometry>
-
 #include "autodiff/sequential.h"
 #include "integrators/multiview_dataset.h"
 #include "integrators/occupancy_grid.h"
@@ -73,46 +71,18 @@
 #include "io/vtk_polydata.h"
 #include "io/png_image.h"
 #include "solvers/problems.h"
+#include "solvers/radiance_scene.h"
 
 namespace nfield::solvers {
 namespace {
 
 using integrators::RaySamples;
 
-enum class Background { kWhite, kBlack, kRandom };
-
-// σ = density(s) and dσ/ds.
-struct DensityActivation {
-  bool truncated_exp = false;  // else softplus
-  double value(double s) const {
-    if (truncated_exp) return std::exp(std::min(s, 15.0));
-    return s > 20 ? s : std::log1p(std::exp(s));
-  }
-  double derivative(double s) const {
-    // Instant NGP's truncated exponential: exp with its gradient clamped at s = ±15.
-    if (truncated_exp) return std::exp(std::clamp(s, -15.0, 15.0));
-    return 1.0 / (1.0 + std::exp(-s));
-  }
-};
-
-double sigmoid(double z) { return 1.0 / (1.0 + std::exp(-z)); }
-
 // The network's inputs [x, d] at every sample of every ray.
 Eigen::MatrixXd sample_inputs(const integrators::Rays<double>& rays, const RaySamples<double>& samples) {
   Eigen::MatrixXd x(samples.size(), 6);
   x << integrators::sample_points(rays, samples), integrators::sample_directions(rays, samples);
   return x;
-}
-
-// σ and c of the samples from the field's raw outputs [s, r, g, b] (rows of `raw`).
-struct Shading {
-  Eigen::VectorXd sigma;
-  Eigen::MatrixXd rgb;
-};
-template <typename Raw>
-Shading shade(const Raw& raw, const DensityActivation& density) {
-  return {raw.col(0).unaryExpr([&density](double s) { return density.value(s); }),
-          raw.middleCols(1, 3).unaryExpr([](double z) { return sigmoid(z); })};
 }
 
 // What a drawn ray batch needs besides the sample positions: the samples' spacing, each
@@ -190,31 +160,7 @@ class RayColourResidual final : public Residual {
 
 class Nerf final : public Problem {
  public:
-  explicit Nerf(const ProblemContext& context) : domain_(scene_domain(context.root.child("scene"))) {
-    const io::ConfigNode scene = context.root.child("scene");
-    box_.lower = Eigen::Vector3d(domain_.lower().data());
-    box_.upper = Eigen::Vector3d(domain_.upper().data());
-    near_ = scene.get_or("near", 0.0);
-    scene.require("near", near_ >= 0 && std::isfinite(near_), "expected a number >= 0");
-    scene.reject_unknown_keys();
-
-    const io::ConfigNode data = context.root.child("data");
-    const std::string background = data.get_choice("background", {"white", "black", "random"}, "white");
-    background_ = background == "white" ? Background::kWhite
-                  : background == "black" ? Background::kBlack
-                                          : Background::kRandom;
-    integrators::DatasetOptions dataset;
-    dataset.background = background_ == Background::kBlack ? Eigen::Vector3d::Zero()
-                                                           : Eigen::Vector3d::Ones();
-    train_ = std::make_shared<integrators::MultiviewDataset>(
-        read(data, "train", context.config_dir, dataset));
-    if (data.has("test")) {
-      integrators::DatasetOptions test = dataset;
-      if (background_ == Background::kRandom) test.background = Eigen::Vector3d::Ones();
-      test_ = std::make_shared<integrators::MultiviewDataset>(read(data, "test", context.config_dir, test));
-    }
-    data.reject_unknown_keys();
-
+  explicit Nerf(const ProblemContext& context) : scene_(context), box_(scene_.box()) {
     const io::ConfigNode render = context.root.child_or_empty("render");
     samples_ = render.has("samples") ? render.get_in_range("samples", 1, 4096) : 64;
     importance_ = render.has("importance") ? render.get_in_range("importance", 0, 4096) : 0;
@@ -227,7 +173,7 @@ class Nerf final : public Problem {
     render.reject_unknown_keys();
   }
 
-  const Domain& domain() const override { return domain_; }
+  const Domain& domain() const override { return scene_.domain(); }
   int field_input_dim() const override { return 6; }
   int output_dim() const override { return 4; }
   std::vector<std::string> output_names() const override { return {"density", "red", "green", "blue"}; }
@@ -240,54 +186,16 @@ class Nerf final : public Problem {
     std::vector<std::pair<std::string, double>> figures{
         {"rays/s", steps_per_second * static_cast<double>(rays_per_step_)},
         {"samples/ray", static_cast<double>(samples_per_step_) / std::max<Eigen::Index>(rays_per_step_, 1)}};
-    if (test_) {
-      // Every 4th pixel of every 4th row of the first test view.
-      const View view = render_view(context, *test_, 0, grid_.get(), 4);
-      figures.emplace_back("test PSNR", io::psnr(view.rgb, view.truth));
-    }
+    for (auto& figure : scene_.progress_psnr(renderer(context, grid_.get()))) figures.push_back(std::move(figure));
     return figures;
   }
 
   void render_views(const OutputContext& context, const RenderRequest& request) const override {
-    std::vector<integrators::Camera> cameras;
-    std::vector<Eigen::MatrixXf> truths;
-    Eigen::Vector3d background = Eigen::Vector3d::Ones();
-    if (!request.poses.empty()) {
-      integrators::DatasetOptions options;
-      options.background = background_ == Background::kBlack ? Eigen::Vector3d::Zero() : Eigen::Vector3d::Ones();
-      const integrators::MultiviewDataset poses = integrators::read_transforms(request.poses, options);
-      background = poses.background;
-      for (const auto& frame : poses.frames) {
-        cameras.push_back(frame.camera);
-        truths.push_back(frame.rgb);
-      }
-    } else {
-      cameras = turntable(request);
-      if (background_ == Background::kBlack) background.setZero();
-    }
     if (grid_) {
       // The grid of the loaded field: one update at decay 0 holds just its densities.
       grid_->update([&](const Eigen::MatrixXd& p) { return density_with(context.values, p); }, 0.0);
     }
-    std::filesystem::create_directories(context.dir);
-    const int width = cameras.front().intrinsics.width, height = cameras.front().intrinsics.height;
-    double psnr_sum = 0;
-    for (size_t k = 0; k < cameras.size(); ++k) {
-      const auto started = std::chrono::steady_clock::now();
-      const View view = render_rays(context, integrators::image_rays<double>(cameras[k]), background, grid_.get());
-      const double ms = 1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-      char stem[64];
-      std::snprintf(stem, sizeof stem, "%s_%03zu", request.poses.empty() ? "turntable" : "view", k);
-      write_view(context.dir / stem, view, truths.empty() ? Eigen::MatrixXf() : truths[k], width, height);
-      if (truths.empty()) {
-        std::printf("%s: %zu/%zu rendered in %.0f ms\n", stem, k + 1, cameras.size(), ms);
-      } else {
-        const double psnr = io::psnr(view.rgb, truths[k]);
-        psnr_sum += psnr;
-        std::printf("%s: %zu/%zu rendered in %.0f ms, PSNR %.2f dB\n", stem, k + 1, cameras.size(), ms, psnr);
-      }
-    }
-    if (!truths.empty()) std::printf("mean PSNR %.2f dB over %zu views\n", psnr_sum / cameras.size(), cameras.size());
+    scene_.render_views(context, request, renderer(context, grid_.get()));
   }
 
   std::vector<LossTerm> loss_terms() const override {
@@ -308,47 +216,27 @@ class Nerf final : public Problem {
   void write_outputs(const OutputContext& context,
                      std::vector<std::pair<std::string, double>>& metrics) const override {
     write_density(context, metrics);
-    if (!test_) return;
-    const std::filesystem::path views = context.dir / "test_views";
-    std::filesystem::create_directories(views);
-    double psnr_sum = 0, ssim_sum = 0, seconds = 0, dense_seconds = 0, dense_psnr_sum = 0;
-    const int width = test_->intrinsics.width, height = test_->intrinsics.height;
-    for (size_t f = 0; f < test_->frames.size(); ++f) {
-      const auto started = std::chrono::steady_clock::now();
-      const View view = render_view(context, *test_, static_cast<int>(f), grid_.get());
-      seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-      if (grid_) {
-        // The same march through every cell: a grid before its first update.
-        const integrators::OccupancyGrid everywhere(box_, grid_->options());
-        const auto dense_started = std::chrono::steady_clock::now();
-        const View dense = render_view(context, *test_, static_cast<int>(f), &everywhere);
-        dense_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - dense_started).count();
-        dense_psnr_sum += io::psnr(dense.rgb, dense.truth);
-      }
-      const Eigen::MatrixXf& truth = test_->frames[f].rgb;
-      const double psnr = io::psnr(view.rgb, truth);
-      const double ssim = io::ssim(view.rgb, truth, width, height);
-      char name[64];
-      std::snprintf(name, sizeof name, "test_%03zu", f);
-      metrics.emplace_back(std::string("psnr_") + name, psnr);
-      metrics.emplace_back(std::string("ssim_") + name, ssim);
-      psnr_sum += psnr;
-      ssim_sum += ssim;
-      write_view(views / name, view, truth, width, height);
-    }
-    const auto n = static_cast<double>(test_->frames.size());
-    metrics.emplace_back("psnr_mean", psnr_sum / n);
-    metrics.emplace_back("ssim_mean", ssim_sum / n);
-    metrics.emplace_back("render_ms_mean", 1e3 * seconds / n);
-    std::printf("test views: mean PSNR %.2f dB, mean SSIM %.4f over %zu views, %.0f ms a view (%s)\n",
-                psnr_sum / n, ssim_sum / n, test_->frames.size(), 1e3 * seconds / n,
-                views.string().c_str());
+    if (!scene_.test()) return;
+    double dense_seconds = 0, dense_psnr_sum = 0;
+    std::function<void(int)> dense_view;
     if (grid_) {
+      // The same march through every cell: a grid before its first update.
+      dense_view = [&](int f) {
+        const integrators::OccupancyGrid everywhere(box_, grid_->options());
+        const auto started = std::chrono::steady_clock::now();
+        const View dense = scene_.render_view(*scene_.test(), f, renderer(context, &everywhere));
+        dense_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+        dense_psnr_sum += io::psnr(dense.rgb, dense.truth);
+      };
+    }
+    const double seconds = scene_.write_test_views(context, renderer(context, grid_.get()), metrics, dense_view);
+    if (grid_) {
+      const auto n = static_cast<double>(scene_.test()->frames.size());
       metrics.emplace_back("psnr_dense_mean", dense_psnr_sum / n);
       metrics.emplace_back("render_ms_dense_mean", 1e3 * dense_seconds / n);
       metrics.emplace_back("occupied_cells", static_cast<double>(grid_->occupied_cells()));
       std::printf("without the occupancy grid: mean PSNR %.2f dB, %.0f ms a view (%.1fx slower)\n",
-                  dense_psnr_sum / n, 1e3 * dense_seconds / n, dense_seconds / std::max(seconds, 1e-9));
+                  dense_psnr_sum / n, 1e3 * dense_seconds / n, dense_seconds / n / std::max(seconds, 1e-9));
     }
   }
 
@@ -389,76 +277,34 @@ class Nerf final : public Problem {
   }
   Eigen::VectorXd density_at(const Eigen::MatrixXd& points) const { return density_with(field_, points); }
 
-  struct View {
-    Eigen::MatrixXf truth;    // pixels × 3: the ground truth of the pixels rendered
-    Eigen::MatrixXf rgb;      // pixels × 3
-    Eigen::VectorXf opacity;  // pixels
-    Eigen::VectorXf depth;    // pixels: expected distance given a hit
-  };
-
-  static Domain scene_domain(const io::ConfigNode& scene) {
-    const std::vector<double> lower = scene.get_list<double>("lower", 3),
-                              upper = scene.get_list<double>("upper", 3);
-    for (int a = 0; a < 3; ++a)
-      scene.require("upper", upper[a] > lower[a], "expected upper > lower on every axis");
-    return Domain(lower, upper);
-  }
-
-  static integrators::MultiviewDataset read(const io::ConfigNode& data, const char* key,
-                                            const std::filesystem::path& dir,
-                                            const integrators::DatasetOptions& options) {
-    try {
-      return integrators::read_transforms(dir / data.get<std::string>(key), options);
-    } catch (const integrators::DatasetError& e) {
-      throw data.error(key, e.what());
-    }
-  }
-
   TermPoints draw(Random& rng, Eigen::Index rays) const {
     std::mt19937_64 engine(rng());
-    integrators::PixelBatch<double> pixels = integrators::sample_pixels<double>(*train_, rays, engine);
-    integrators::clip_to_box(pixels.rays, box_, near_);
+    PixelTargets drawn = scene_.draw_pixels(rays, engine);
+    const integrators::Rays<double>& pixel_rays = drawn.pixels.rays;
     auto batch = std::make_shared<RayBatch>();
     rays_per_step_ = rays;
     if (grid_ && field_) {
       if (draws_ % occupancy_.every == 0)
         grid_->update([this](const Eigen::MatrixXd& p) { return density_at(p); }, occupancy_.decay);
       ++draws_;
-      batch->samples = grid_->march(pixels.rays, occupancy_.march);
+      batch->samples = grid_->march(pixel_rays, occupancy_.march);
       // Each sample anywhere in its interval, so that training sees all of it.
       for (Eigen::Index i = 0; i < batch->samples.size(); ++i)
         batch->samples.t(i) += (static_cast<double>(engine() >> 11) * 0x1.0p-53 - 0.5) * batch->samples.delta(i);
     } else {
-      batch->samples = integrators::stratified_samples(pixels.rays, {samples_, true}, engine);
+      batch->samples = integrators::stratified_samples(pixel_rays, {samples_, true}, engine);
       if (importance_ > 0 && field_)
-        batch->samples = refined(field_, pixels.rays, batch->samples, pixels.background, false, engine);
+        batch->samples = refined(field_, pixel_rays, batch->samples, drawn.pixels.background, false, engine);
     }
-    if (background_ == Background::kRandom) {
-      batch->background.resize(rays, 3);
-      for (Eigen::Index i = 0; i < batch->background.size(); ++i)
-        batch->background.data()[i] = static_cast<double>(engine() >> 11) * 0x1.0p-53;
-      batch->target = integrators::composite_on<double>(pixels, batch->background);
-    } else {
-      batch->background = pixels.background.transpose();
-      batch->target = pixels.rgb;
-    }
+    scene_.draw_targets(drawn, engine);
+    batch->target = std::move(drawn.target);
+    batch->background = std::move(drawn.background);
     TermPoints points;
-    points.x = sample_inputs(pixels.rays, batch->samples);
+    points.x = sample_inputs(pixel_rays, batch->samples);
     points.groups = batch->samples.offsets;
     samples_per_step_ = batch->samples.size();
     points.context = std::move(batch);
     return points;
-  }
-
-  // Every `stride`-th pixel of every `stride`-th row of a view, marched through `grid` or
-  // sampled at the stratified midpoints.
-  View render_view(const OutputContext& context, const integrators::MultiviewDataset& data,
-                   int frame, const integrators::OccupancyGrid* grid, int stride = 1) const {
-    integrators::PixelBatch<double> pixels = integrators::frame_pixels<double>(data, frame);
-    if (stride > 1) pixels = every_other(pixels, data.intrinsics.width, stride);
-    View view = render_rays(context, std::move(pixels.rays), data.background, grid);
-    view.truth = pixels.rgb.cast<float>();
-    return view;
   }
 
   // The coarse samples and `importance_` more per ray drawn from their rendering weights with
@@ -476,27 +322,21 @@ class Nerf final : public Problem {
     return integrators::importance_samples(rays, coarse, weights, options, engine);
   }
 
-  // Rays (clipped to the box here) marched through `grid` or sampled at the stratified
-  // midpoints (refined by importance), rendered on `background`.
-  View render_rays(const OutputContext& context, integrators::Rays<double> rays,
-                   const Eigen::Vector3d& background, const integrators::OccupancyGrid* grid) const {
-    integrators::clip_to_box(rays, box_, near_);
-    std::mt19937_64 unused(0);
-    RaySamples<double> samples = grid ? grid->march(rays, occupancy_.march)
-                                      : integrators::stratified_samples(rays, {samples_, false}, unused);
-    if (!grid && importance_ > 0) samples = refined(context.values, rays, samples, background, true, unused);
-    const Shading shading = shade(context.values(sample_inputs(rays, samples)), density_);
-    const auto result = integrators::render<double>(samples, shading.sigma, shading.rgb, background.transpose());
-    View view;
-    view.rgb = result.color.cast<float>();
-    view.opacity = result.opacity.cast<float>();
-    view.depth = (result.depth.array() / result.opacity.array().max(1e-6)).cast<float>();
-    return view;
+  // Rays marched through `grid` or sampled at the stratified midpoints (refined by
+  // importance), with the field context.values.
+  RenderRays renderer(const OutputContext& context, const integrators::OccupancyGrid* grid) const {
+    return [this, &context, grid](const integrators::Rays<double>& rays, const Eigen::Vector3d& background) {
+      std::mt19937_64 unused(0);
+      RaySamples<double> samples = grid ? grid->march(rays, occupancy_.march)
+                                        : integrators::stratified_samples(rays, {samples_, false}, unused);
+      if (!grid && importance_ > 0) samples = refined(context.values, rays, samples, background, true, unused);
+      return composite(samples, shade(context.values(sample_inputs(rays, samples)), density_), background);
+    };
   }
 
   void write_density(const OutputContext& context,
                      std::vector<std::pair<std::string, double>>& metrics) const {
-    const io::Grid grid = io::make_grid(domain_.lower(), domain_.upper(), context.grid);
+    const io::Grid grid = io::make_grid(scene_.domain().lower(), scene_.domain().upper(), context.grid);
     const Eigen::MatrixXd points = grid.points(3);
     Eigen::VectorXd sigma(points.rows());
     constexpr Eigen::Index kChunk = 1 << 16;
@@ -512,83 +352,8 @@ class Nerf final : public Problem {
     metrics.emplace_back("surface_triangles", static_cast<double>(surface.triangles.rows()));
   }
 
-  // Cameras on a circle around the scene box's centre at the training cameras' mean distance,
-  // `elevation` above the x–z plane (the data's up is +y), looking at the centre, with the
-  // training views' intrinsics.
-  std::vector<integrators::Camera> turntable(const RenderRequest& request) const {
-    const Eigen::Vector3d centre = 0.5 * (box_.lower + box_.upper);
-    double radius = 0;
-    for (const auto& frame : train_->frames) radius += (frame.camera.centre() - centre).norm();
-    radius /= static_cast<double>(train_->frames.size());
-    const double elevation = request.elevation_degrees * std::numbers::pi / 180;
-    std::vector<integrators::Camera> cameras;
-    for (int k = 0; k < request.turntable_frames; ++k) {
-      const double azimuth = 2 * std::numbers::pi * k / request.turntable_frames;
-      const Eigen::Vector3d eye = centre + radius * Eigen::Vector3d(std::cos(elevation) * std::sin(azimuth),
-                                                                     std::sin(elevation),
-                                                                     std::cos(elevation) * std::cos(azimuth));
-      // OpenGL camera axes: x right, y up, looking along −z.
-      const Eigen::Vector3d back = (eye - centre).normalized();
-      const Eigen::Vector3d right = Eigen::Vector3d::UnitY().cross(back).normalized();
-      const Eigen::Vector3d up = back.cross(right);
-      integrators::Camera camera;
-      camera.intrinsics = train_->intrinsics;
-      camera.camera_to_world.block<3, 1>(0, 0) = right;
-      camera.camera_to_world.block<3, 1>(0, 1) = up;
-      camera.camera_to_world.block<3, 1>(0, 2) = back;
-      camera.camera_to_world.block<3, 1>(0, 3) = eye;
-      cameras.push_back(camera);
-    }
-    return cameras;
-  }
-
-  static integrators::PixelBatch<double> every_other(const integrators::PixelBatch<double>& all,
-                                                    int width, int stride) {
-    std::vector<Eigen::Index> keep;
-    for (Eigen::Index p = 0; p < all.rgb.rows(); ++p)
-      if ((p / width) % stride == 0 && (p % width) % stride == 0) keep.push_back(p);
-    integrators::PixelBatch<double> some;
-    some.rays.origins = all.rays.origins(keep, Eigen::all);
-    some.rays.directions = all.rays.directions(keep, Eigen::all);
-    some.rays.depth_scale = all.rays.depth_scale(keep);
-    some.rays.near = all.rays.near(keep);
-    some.rays.far = all.rays.far(keep);
-    some.rgb = all.rgb(keep, Eigen::all);
-    some.background = all.background;
-    return some;
-  }
-
-  static void write_view(const std::filesystem::path& stem, const View& view,
-                         const Eigen::MatrixXf& truth, int width, int height) {
-    auto image = [&](Eigen::MatrixXf pixels) {
-      io::Image i;
-      i.width = width;
-      i.height = height;
-      i.channels = static_cast<int>(pixels.cols());
-      i.pixels = std::move(pixels);
-      return i;
-    };
-    io::write_png(stem.string() + "_render.png", image(view.rgb));
-    if (truth.size() > 0) {
-      io::write_png(stem.string() + "_truth.png", image(truth));
-      // |error| × 4 so that small errors show.
-      io::write_png(stem.string() + "_error.png", image((4 * (view.rgb - truth).cwiseAbs()).eval()));
-    }
-    io::write_png(stem.string() + "_opacity.png", image(view.opacity));
-    // Depth of the pixels the object covers, near dark and far light; misses white.
-    const Eigen::ArrayXf hit = (view.opacity.array() > 0.5f).cast<float>();
-    const float near = (hit > 0).select(view.depth.array(), INFINITY).minCoeff();
-    const float far = (hit > 0).select(view.depth.array(), -INFINITY).maxCoeff();
-    const Eigen::VectorXf depth =
-        (hit > 0).select((view.depth.array() - near) / std::max(far - near, 1e-6f), 1.0f);
-    io::write_png(stem.string() + "_depth.png", image(depth));
-  }
-
-  Domain domain_;
+  RadianceScene scene_;
   integrators::SceneBox box_;
-  double near_ = 0;
-  Background background_ = Background::kWhite;
-  std::shared_ptr<const integrators::MultiviewDataset> train_, test_;
   int samples_ = 64;
   int importance_ = 0;
   double surface_ = 10;

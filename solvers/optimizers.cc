@@ -372,10 +372,10 @@ class LmOptimizer final : public OptimizerOf<LmOptimizer, LmStageOptions> {
       // Ceres counts the entries of its dense Jacobian in an int.
       double rows = 0;
       for (size_t k = 0; k < stage.term_count(); ++k) {
-        if (!stage.points(k).groups.empty())
+        if (!stage.points(k).groups.empty() || stage.points(k).tangents.size() > 0)
           throw std::runtime_error(name + "loss term '" + stage.term_name(k) +
-                                   "' reads groups of points; Levenberg-Marquardt takes "
-                                   "per-point residuals only (use adam or lbfgs)");
+                                   "' reads groups of points or per-point tangents; Levenberg-Marquardt "
+                                   "takes per-point residuals at shared tangents only (use adam or lbfgs)");
         rows += static_cast<double>(stage.points(k).x.rows()) * stage.residual(k).components();
       }
       const std::string too_large = lm_jacobian_too_large(rows, field.parameter_count());

@@ -12,6 +12,7 @@ void register_problems(Registry<ProblemFactory>& registry) {
   registry.add("sdf", make_sdf);
   registry.add("nerf", make_nerf);
   registry.add("autoint_1d", make_autoint_1d);
+  registry.add("autoint_nerf", make_autoint_nerf);
 }
 
 namespace {

@@ -61,8 +61,11 @@ class LinearResidual final : public Residual {
 // ray), the groups: offsets 0 = g₀ ≤ … ≤ g_G = N, group k being rows [g_k, g_{k+1}) of x
 // (autodiff::Batch keeps a group inside one block of the pass). `context` carries what such a
 // residual needs besides x (the rays' pixel colours, sample spacings); a term that has one
-// is drawn anew on resume rather than saved in the checkpoint. A term over single points
-// returns just the matrix, and its residual may take just the matrix.
+// is drawn anew on resume rather than saved in the checkpoint. `tangents`, when not empty,
+// are per-point tangent directions (N × input_dim·T, autodiff::PointTangents) that replace
+// the term's StreamSpec::tangents (a ray's direction at each of its samples); T is still
+// the number of the spec's tangent columns. A term over single points returns just the
+// matrix, and its residual may take just the matrix.
 struct TermPoints {
   TermPoints() = default;
   TermPoints(Eigen::MatrixXd points) : x(std::move(points)) {}  // NOLINT: per-point terms
@@ -74,6 +77,7 @@ struct TermPoints {
   }
 
   Eigen::MatrixXd x;
+  Eigen::MatrixXd tangents;  // empty: the spec's tangents for every point
   std::vector<Eigen::Index> groups;
   std::shared_ptr<const void> context;
 };

@@ -45,6 +45,7 @@ Trainer<Scalar>::Trainer(const Problem& problem, fields::Field<Scalar>& field,
       sequences_.emplace_back(options_.sampler, options_.seed * 0x100000001B3ull + 7919 * (k + 1));
   points_.resize(terms_.size());
   points_scalar_.resize(terms_.size());
+  tangents_scalar_.resize(terms_.size());
   residuals_.resize(terms_.size());
   field_.set_evaluation({options_.block, options_.threads});
 }
@@ -61,14 +62,16 @@ void Trainer<Scalar>::resample() {
     }
     if (static_cast<int>(k) == pde_) previous_adaptive_rows_ = adaptive_points_.rows();
     if (static_cast<int>(k) == pde_ && adaptive_points_.rows() > 0) {
-      if (!points_[k].groups.empty())
+      if (!points_[k].groups.empty() || points_[k].tangents.size() > 0)
         throw std::logic_error("training.adaptive: loss term '" + terms_[k].name +
-                               "' reads groups of points; refinement adds single points");
+                               "' reads groups of points or per-point tangents; refinement adds "
+                               "single points");
       Eigen::MatrixXd joined(points_[k].x.rows() + adaptive_points_.rows(), points_[k].x.cols());
       joined << points_[k].x, adaptive_points_;
       points_[k].x = std::move(joined);
     }
     points_scalar_[k] = points_[k].x.template cast<Scalar>();
+    tangents_scalar_[k] = points_[k].tangents.template cast<Scalar>();
     residuals_[k] = terms_[k].residual(points_[k]);
   }
 }
@@ -79,7 +82,9 @@ double Trainer<Scalar>::term_loss(size_t k, const Scalar* params, double weight,
                       causal_.point_weights.size() == points_[k].x.rows();
   const ResidualLoss<Scalar> loss(*residuals_[k], weight, points_[k].residual_rows(),
                                   causal ? &causal_.point_weights : nullptr);
-  const autodiff::Batch<Scalar> batch{points_scalar_[k], nullptr, points_[k].groups};
+  const autodiff::Batch<Scalar> batch{points_scalar_[k],
+                                      tangents_scalar_[k].size() > 0 ? &tangents_scalar_[k] : nullptr,
+                                      points_[k].groups};
   return field_.value_and_gradient(params, layouts_[k], batch, loss, gradient);
 }
 
@@ -301,6 +306,8 @@ void Trainer<Scalar>::save_state(io::H5Writer& file) const {
       if (!points_[k].groups.empty())
         file.write("trainer/groups/" + std::to_string(k),
                    std::vector<std::int64_t>(points_[k].groups.begin(), points_[k].groups.end()));
+      if (points_[k].tangents.size() > 0)
+        file.write("trainer/tangents/" + std::to_string(k), points_[k].tangents);
     }
   file.write("trainer/stage_losses", stage_losses_);
   file.write("trainer/stage_errors", stage_errors_);
@@ -332,7 +339,10 @@ void Trainer<Scalar>::load_state(const io::H5Reader& file) {
       const auto g = file.read_vector<std::int64_t>(groups);
       points_[k].groups.assign(g.data(), g.data() + g.size());
     }
+    const std::string tangents = "trainer/tangents/" + std::to_string(k);
+    if (file.has_dataset(tangents)) points_[k].tangents = file.read_matrix<double>(tangents);
     points_scalar_[k] = points_[k].x.template cast<Scalar>();
+    tangents_scalar_[k] = points_[k].tangents.template cast<Scalar>();
     residuals_[k] = terms_[k].residual(points_[k]);
   }
   if (file.has_dataset("trainer/stage_losses")) {

@@ -123,6 +123,7 @@ class Trainer {
   std::vector<autodiff::StreamLayout> layouts_;
   std::vector<TermPoints> points_;
   std::vector<autodiff::Matrix<Scalar>> points_scalar_;
+  std::vector<autodiff::Matrix<Scalar>> tangents_scalar_;  // empty: the spec's tangents
   std::vector<std::unique_ptr<Residual>> residuals_;
   std::vector<double> losses_, stage_losses_, stage_errors_, stage_seconds_, step_ms_;
   std::unique_ptr<Optimizer> optimizer_;  // of the current stage, while it runs or resumes

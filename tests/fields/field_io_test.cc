@@ -38,6 +38,7 @@ void expect_round_trip(const FieldOptions& options, const std::string& name) {
   const FieldOptions o = load_field_options(file);
   EXPECT_EQ(o.hidden, options.hidden);
   EXPECT_EQ(o.encoding.type, options.encoding.type);
+  EXPECT_EQ(o.encoding.normalize, options.encoding.normalize);
   if (options.encoding.type == "cusp") {
     EXPECT_EQ(o.encoding.axis, options.encoding.axis);
     EXPECT_EQ(o.encoding.at, options.encoding.at);
@@ -75,6 +76,12 @@ TEST(FieldIo, RoundTripIsBitExactForEveryEncodingAndPrecision) {
   mlp.activation = "softplus";
   mlp.hidden = {4};
   expect_round_trip<double>(mlp, "mlp.h5");
+  FieldOptions normalized;
+  normalized.input_dim = 3;
+  normalized.hidden = {4};
+  normalized.encoding.type = "positional";
+  normalized.encoding.normalize = true;
+  expect_round_trip<double>(normalized, "positional_normalized.h5");
 }
 
 TEST(FieldIo, H5pyReadsTheLayout) {

@@ -187,6 +187,42 @@ TEST(LateCuspFeatures, ZeroWeightsAndNoGradientBeforeTheirStage) {
 
 // A SIREN with hidden [64, 64] (ω₀ = 30) in float against the same parameters in double:
 // every stream within float rounding, relative to its own scale.
+// encoding.normalize scales octave l of the positional encoding by 2⁻ˡ: the same field as
+// the plain encoding with the first layer's weights on those features divided by 2ˡ, in
+// every stream (value, tangents, Laplacian).
+TEST(NormalizedPositionalEncoding, ScalesOctaveLByTwoToTheMinusL) {
+  FieldOptions o;
+  o.type = "mlp";
+  o.activation = "tanh";
+  o.input_dim = 2;
+  o.hidden = {6};
+  o.encoding.type = "positional";
+  o.encoding.frequencies = 4;
+  const Field<double> plain(o);
+  o.encoding.normalize = true;
+  Field<double> normalized(o);
+  normalized.parameters() = plain.parameters();
+  const DenseSlice first = dense_slices(plain).front();
+  const int d = o.input_dim, m = o.encoding.frequencies * d;
+  ASSERT_EQ(first.in, d + 2 * m);
+  Eigen::Map<Eigen::MatrixXd> w(normalized.parameters().data() + first.offset, first.out, first.in);
+  for (int l = 0; l < o.encoding.frequencies; ++l)
+    for (int i = 0; i < d; ++i)
+      for (int phase = 0; phase < 2; ++phase) w.col(d + phase * m + l * d + i) *= std::ldexp(1.0, l);
+  std::mt19937_64 rng(3);
+  const Eigen::MatrixXd x = random_matrix(5, d, rng);
+  const autodiff::StreamLayout layout(autodiff::StreamSpec::laplacian(d));
+  autodiff::Streams<double> a, b;
+  plain.evaluate(layout, x, a);
+  normalized.evaluate(layout, x, b);
+  EXPECT_LT(relative_error(b.data, a.data, 1e-12), 1e-13);
+  // Without the compensation the high octaves are damped: the fields differ.
+  Field<double> damped(o);
+  damped.parameters() = plain.parameters();
+  damped.evaluate(layout, x, b);
+  EXPECT_GT(relative_error(b.data, a.data, 1e-12), 1e-3);
+}
+
 TEST(FloatStreams, MatchDoubleWithinFloatRounding) {
   for (int dim = 2; dim <= 3; ++dim) {
     FieldOptions o;

@@ -79,6 +79,29 @@ TEST(StratifiedSamples, MidpointsForEvaluation) {
   EXPECT_EQ(d.row(1), Eigen::RowVector3d(1, 0, 0));
 }
 
+// Sections cover [near, far] exactly: midpoints, every length (the last one's too) equal, and
+// rendering a constant density over them is exact (e^{−σ(far − near)}).
+TEST(EqualSections, MidpointsOfEqualSectionsCoveringTheRay) {
+  const auto rays = three_rays();
+  const auto s = equal_sections(rays, 4);
+  EXPECT_EQ(s.offsets, (std::vector<Eigen::Index>{0, 4, 4, 8}));
+  EXPECT_EQ(s.t.head(4), Eigen::Vector4d(1.25, 1.75, 2.25, 2.75));
+  EXPECT_EQ(s.delta.head(4), Eigen::Vector4d::Constant(0.5));
+  EXPECT_EQ(s.delta.tail(4), Eigen::Vector4d::Constant(0.125));
+  EXPECT_NO_THROW(s.validate());
+  const Eigen::VectorXd sigma = Eigen::VectorXd::Constant(s.size(), 0.7);
+  const auto image = render<double>(s, sigma, Eigen::MatrixXd::Zero(s.size(), 3), Eigen::MatrixXd::Ones(1, 3));
+  EXPECT_NEAR(image.color(0, 0), std::exp(-0.7 * 2.0), 1e-15);
+  EXPECT_NEAR(image.color(2, 0), std::exp(-0.7 * 0.5), 1e-15);
+  EXPECT_EQ(image.color(1, 0), 1.0);
+  EXPECT_THROW(equal_sections(rays, 0), std::invalid_argument);
+  Rays<double> open;
+  open.resize(1);
+  open.origins.setZero();
+  open.directions.setZero();
+  EXPECT_THROW(equal_sections(open, 2), std::invalid_argument);  // far = +∞
+}
+
 TEST(StratifiedSamples, RejectsInfiniteBoundsAndBadOptions) {
   Rays<double> rays;
   rays.resize(2);  // far = +∞ until set

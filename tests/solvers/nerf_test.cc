@@ -16,6 +16,7 @@
 #include "io/png_image.h"
 #include "solvers/run.h"
 #include "tests/testing/config_errors.h"
+#include "tests/testing/ray_residual_checks.h"
 #include "tests/testing/scratch.h"
 
 namespace nfield::solvers {
@@ -53,43 +54,9 @@ TEST(Nerf, RayResidualAdjointMatchesCentralDifferences) {
   const auto residual = terms[0].residual(points);
 
   std::mt19937_64 engine(5);
-  auto uniform = [&engine] { return static_cast<double>(engine() >> 11) * 0x1.0p-53 - 0.5; };
   const autodiff::StreamLayout layout(autodiff::StreamSpec::values(6));
-  Streams<double> out;
-  out.resize(points.x.rows(), 1, 4);
-  for (Eigen::Index i = 0; i < out.data.size(); ++i) out.data.data()[i] = 4 * uniform();
-  Eigen::MatrixXd r_bar(12, 3), r;
-  for (Eigen::Index i = 0; i < r_bar.size(); ++i) r_bar.data()[i] = uniform();
-  Streams<double> adjoint;
-  adjoint.resize(out.points, 1, 4);
-  adjoint.data.setZero();
-  residual->evaluate(0, layout, out, r);
-  ASSERT_EQ(r.rows(), 12);
-  ASSERT_EQ(r.cols(), 3);
-  residual->backward(0, layout, out, r_bar, adjoint);
-
-  Eigen::MatrixXd v(out.data.rows(), 4);
-  for (Eigen::Index i = 0; i < v.size(); ++i) v.data()[i] = uniform();
-  auto objective = [&](double h) {
-    Streams<double> moved = out;
-    moved.data += h * v;
-    Eigen::MatrixXd rh;
-    residual->evaluate(0, layout, moved, rh);
-    return (r_bar.array() * rh.array()).sum();
-  };
-  const double h = 1e-6, fd = (objective(h) - objective(-h)) / (2 * h);
-  const double reverse = (adjoint.data.array() * v.array()).sum();
-  EXPECT_NEAR(reverse, fd, 1e-7 * (1 + std::abs(fd)));
-
-  // The rows of the rays in a block do not depend on where the block starts.
-  const Eigen::Index cut = points.groups[5];
-  Streams<double> tail;
-  tail.resize(out.points - cut, 1, 4);
-  tail.data = out.data.bottomRows(out.points - cut);
-  Eigen::MatrixXd r_tail;
-  residual->evaluate(cut, layout, tail, r_tail);
-  ASSERT_EQ(r_tail.rows(), 7);
-  EXPECT_EQ(r_tail, r.bottomRows(7));
+  const Streams<double> out = testutil::random_streams(points.x.rows(), 1, 4, 4.0, engine);
+  testutil::expect_ray_residual_adjoint(*residual, layout, out, points.groups, 5, engine);
 }
 
 // Hierarchical sampling: each ray that crosses the box gets its stratified samples and
