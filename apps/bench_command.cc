@@ -17,7 +17,7 @@
 #include "apps/gemm_rate.h"
 #include "apps/nerf_bench.h"
 #include "fields/field.h"
-#include "solvers/adam.h"
+#include "solvers/training/adam.h"
 
 namespace nfield::apps {
 namespace {

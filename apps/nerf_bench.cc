@@ -17,10 +17,10 @@
 #include "integrators/ray_sampling.h"
 #include "integrators/scene_box.h"
 #include "integrators/volume_rendering.h"
-#include "solvers/adam.h"
-#include "solvers/optimizers.h"
+#include "solvers/training/adam.h"
+#include "solvers/training/optimizers.h"
 #include "solvers/run.h"
-#include "solvers/sampler.h"
+#include "solvers/training/sampler.h"
 
 namespace nfield::apps {
 namespace {
@@ -133,7 +133,7 @@ void run_nerf_bench(const NerfBenchOptions& options) {
   fields::Field<float> field(setup.field, {setup.training.block, used_threads});
   const std::vector<GemmShape> shapes = dense_shapes(field);
 
-  // The trainer's loss terms and batch sizes (solvers/trainer.cc: resample, term_loss).
+  // The trainer's loss terms and batch sizes (solvers/training/trainer.cc: resample, term_loss).
   const std::vector<solvers::LossTerm> terms = setup.problem->loss_terms();
   for (const solvers::LossTerm& term : terms)
     if (term.spec.tangents.cols() > 0)

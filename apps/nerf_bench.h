@@ -7,7 +7,7 @@
 // A training step here is the one `nfield run` takes on that config: the problem's loss
 // terms draw the rays (random pixels of all training images, clipped to the scene box,
 // jittered stratified samples), solvers::ResidualLoss wraps the ray residual (volume
-// rendering and its adjoint, solvers/nerf.cc), Field::value_and_gradient runs the forward
+// rendering and its adjoint, solvers/problems/nerf.cc), Field::value_and_gradient runs the forward
 // and reverse passes over groups of samples, and Adam updates θ. The problem's occupancy
 // grid is never updated (no field is watched), so every step samples `render.samples`
 // stratified points per ray, as the PyTorch peer does.

@@ -17,7 +17,7 @@
 
 #include "fields/field.h"
 #include "io/png_image.h"
-#include "solvers/adam.h"
+#include "solvers/training/adam.h"
 
 using namespace nfield;
 

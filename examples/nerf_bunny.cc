@@ -27,7 +27,7 @@
 #include "integrators/volume_rendering.h"
 #include "io/image_metrics.h"
 #include "io/png_image.h"
-#include "solvers/adam.h"
+#include "solvers/training/adam.h"
 
 using namespace nfield;
 

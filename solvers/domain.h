@@ -7,7 +7,7 @@
 // Faces are named x_min, x_max, y_min, … ; "boundary" means all space faces, "initial" the
 // slice t = t0. Sampling draws from the caller's random engine only, so a run's points are
 // reproducible from its seed (and its saved engine state on resume). When the engine carries
-// a low-discrepancy sequence (solvers/sampler.h), the unit-cube points come from it: the
+// a low-discrepancy sequence (solvers/training/sampler.h), the unit-cube points come from it: the
 // interior uses input_dim coordinates, the initial slice the space ones, a union of faces
 // one more coordinate to pick the face (so each face gets a share ∝ its measure).
 #pragma once
@@ -19,7 +19,7 @@
 #include <Eigen/Core>
 
 #include "io/config.h"
-#include "solvers/sampler.h"
+#include "solvers/training/sampler.h"
 
 namespace nfield::solvers {
 

@@ -17,10 +17,10 @@
 #include "fields/field_io.h"
 #include "io/atomic_write.h"
 #include "io/version.h"
-#include "solvers/grid_output.h"
-#include "solvers/hard_constraints.h"
-#include "solvers/progress_printer.h"
-#include "solvers/trainer.h"
+#include "solvers/output/grid_output.h"
+#include "solvers/conditions/hard_constraints.h"
+#include "solvers/training/progress_printer.h"
+#include "solvers/training/trainer.h"
 
 namespace nfield::solvers {
 namespace {
@@ -146,7 +146,9 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
   bool finished;
   {
     SignalGuard guard;
-    ProgressPrinter printer({.log_every = setup.training.log_every});
+    ProgressPrinterOptions printing;
+    printing.log_every = setup.training.log_every;
+    ProgressPrinter printer(printing);
     typename Trainer<Scalar>::Callbacks callbacks;
     callbacks.stop_requested = [] { return g_signal.load() != 0; };
     // The problem's own progress figures, refreshed at most every 10 s (they may render).

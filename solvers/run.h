@@ -20,9 +20,9 @@
 #include <vector>
 
 #include "fields/field.h"
-#include "solvers/output_options.h"
+#include "solvers/output/output_options.h"
 #include "solvers/problem.h"
-#include "solvers/training_options.h"
+#include "solvers/training/training_options.h"
 
 namespace nfield::solvers {
 

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 //
-// AutoInt in 1-D (solvers/autoint_1d.cc): a field trained through its derivative recovers a
+// AutoInt in 1-D (solvers/problems/autoint_1d.cc): a field trained through its derivative recovers a
 // closed-form antiderivative up to a constant, its derivative stream agrees with central
 // differences of its values, integrals from its ends beat the untrained field by orders of
 // magnitude, data integrands are fitted at their points, and bad configs are located.
@@ -13,7 +13,7 @@
 
 #include "integrators/segment_integrals.h"
 #include "solvers/run.h"
-#include "solvers/trainer.h"
+#include "solvers/training/trainer.h"
 #include "tests/testing/config_errors.h"
 #include "tests/testing/scratch.h"
 

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 //
-// The eikonal problem (solvers/eikonal.cc): the nonlinear residual's backward pass is the
+// The eikonal problem (solvers/problems/eikonal.cc): the nonlinear residual's backward pass is the
 // adjoint of its evaluate (central differences, plain and factored, 2D and 3D); the exact
 // first-arrival time of the two-layer medium equals a brute-force search over interface
 // crossing points (direct, head and refracted waves) and satisfies |∇T| = 1/v; a short
@@ -27,7 +27,7 @@
 #include <vector>
 
 #include "solvers/run.h"
-#include "solvers/trainer.h"
+#include "solvers/training/trainer.h"
 #include "tests/testing/scratch.h"
 
 namespace nfield::solvers {

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 //
-// Hard conditions (solvers/hard_constraints.h): the streams of u = A + D·N against finite
+// Hard conditions (solvers/conditions/hard_constraints.h): the streams of u = A + D·N against finite
 // differences of u itself, the adjoint against finite differences of a loss, exact boundary
 // and initial data, config errors, and a short Poisson run where hard beats soft.
 #include <gtest/gtest.h>
@@ -14,10 +14,10 @@
 #include <string>
 
 #include "io/vtk_image.h"
-#include "solvers/conditions.h"
-#include "solvers/hard_constraints.h"
+#include "solvers/conditions/conditions.h"
+#include "solvers/conditions/hard_constraints.h"
 #include "solvers/run.h"
-#include "solvers/trainer.h"
+#include "solvers/training/trainer.h"
 #include "tests/testing/scratch.h"
 
 namespace nfield::solvers {

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 //
-// The Helmholtz problem (solvers/helmholtz.cc): its residuals vanish on exact solutions fed in
+// The Helmholtz problem (solvers/problems/helmholtz.cc): its residuals vanish on exact solutions fed in
 // as hand-built derivative streams (the real manufactured case; the Green's function outside
 // the absorbing layer), the stretched operator inside the layer matches an independent
 // finite-difference evaluation of Σ_j ∂_j((P/e_j²) ∂_j u) + P k² u − P f, the point source's
@@ -20,7 +20,7 @@
 #include <string>
 
 #include "solvers/run.h"
-#include "solvers/trainer.h"
+#include "solvers/training/trainer.h"
 #include "tests/testing/scratch.h"
 
 namespace nfield::solvers {

@@ -15,9 +15,9 @@
 
 #include "io/config.h"
 #include "io/hdf5_file.h"
-#include "solvers/optimizers.h"
+#include "solvers/training/optimizers.h"
 #include "solvers/run.h"
-#include "solvers/trainer.h"
+#include "solvers/training/trainer.h"
 #include "tests/testing/config_errors.h"
 #include "tests/testing/scratch.h"
 

@@ -12,10 +12,10 @@
 #include <string>
 
 #include "io/registry.h"
-#include "solvers/optimizer.h"
-#include "solvers/optimizers.h"
+#include "solvers/training/optimizer.h"
+#include "solvers/training/optimizers.h"
 #include "solvers/run.h"
-#include "solvers/trainer.h"
+#include "solvers/training/trainer.h"
 #include "tests/testing/config_errors.h"
 #include "tests/testing/scratch.h"
 

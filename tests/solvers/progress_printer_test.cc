@@ -2,7 +2,7 @@
 //
 // Progress lines keep coming while one optimizer step runs long (a Levenberg–Marquardt
 // iteration), and a slow stage prints its steps by time, not only every log_every steps.
-#include "solvers/progress_printer.h"
+#include "solvers/training/progress_printer.h"
 
 #include <gtest/gtest.h>
 

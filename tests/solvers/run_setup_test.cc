@@ -11,9 +11,9 @@
 
 #include "fields/field_io.h"
 #include "io/hdf5_file.h"
-#include "solvers/problems.h"
+#include "solvers/problems/problems.h"
 #include "solvers/run.h"
-#include "solvers/trainer.h"
+#include "solvers/training/trainer.h"
 #include "tests/testing/config_errors.h"
 #include "tests/testing/scratch.h"
 

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 //
-// training.sampler, adaptive, balance and causal (solvers/sampler.h, loss_balancing.h):
+// training.sampler, adaptive, balance and causal (solvers/training/sampler.h, loss_balancing.h):
 // quasi-random points lie in the domain, cover faces and the initial slice, and integrate a
 // smooth function far better than random points; RAR finds a localized source; grad_norm
 // sets λ to max|∇L_pde| / mean|∇L_bc| at the parameters it saw; causal weights are
@@ -16,10 +16,10 @@
 
 #include "fields/field_io.h"
 #include "io/hdf5_file.h"
-#include "solvers/loss_balancing.h"
+#include "solvers/training/loss_balancing.h"
 #include "solvers/run.h"
-#include "solvers/sampler.h"
-#include "solvers/trainer.h"
+#include "solvers/training/sampler.h"
+#include "solvers/training/trainer.h"
 #include "tests/testing/scratch.h"
 
 namespace nfield::solvers {

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 //
-// The signed-distance problem (solvers/sdf.cc): the residuals vanish on the exact distance of
+// The signed-distance problem (solvers/problems/sdf.cc): the residuals vanish on the exact distance of
 // a sphere, their backward passes are the adjoints of their evaluate (central differences),
 // normalization maps the cloud into the domain, and a short run on a sphere point cloud gives
 // a zero level set near the sphere, written as surface.vtp/surface.ply with its metrics.

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 //
-// The wave problem (solvers/wave.cc): its residuals vanish on exact solutions fed in as
+// The wave problem (solvers/problems/wave.cc): its residuals vanish on exact solutions fed in as
 // hand-built derivative streams (whatever the stream layout of each term), do not vanish on
 // wrong ones, and a tiny training run learns a standing wave.
 #include <gtest/gtest.h>
@@ -14,7 +14,7 @@
 #include <string>
 
 #include "solvers/run.h"
-#include "solvers/trainer.h"
+#include "solvers/training/trainer.h"
 #include "tests/testing/scratch.h"
 
 namespace nfield::solvers {

@@ -1,0 +1,451 @@
+// SPDX-License-Identifier: MIT
+#include "solvers/conditions/hard_constraints.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include "io/registry.h"
+#include "solvers/conditions/condition_values.h"
+
+namespace nfield::solvers {
+
+Jet Jet::constant(Eigen::Index n, int d, double c) {
+  Jet j;
+  j.value = Eigen::VectorXd::Constant(n, c);
+  j.gradient = Eigen::MatrixXd::Zero(n, d);
+  j.hessian.assign(static_cast<size_t>(d) * d, Eigen::VectorXd::Zero(n));
+  return j;
+}
+
+Jet Jet::operator*(const Jet& g) const {
+  const Jet& f = *this;
+  const Eigen::Index d = f.gradient.cols();
+  Jet out;
+  out.value = f.value.cwiseProduct(g.value);
+  out.gradient = f.gradient.array().colwise() * g.value.array() +
+                 g.gradient.array().colwise() * f.value.array();
+  if (!f.hessian.empty() && !g.hessian.empty()) {
+    out.hessian.resize(f.hessian.size());
+    for (Eigen::Index a = 0; a < d; ++a)
+      for (Eigen::Index b = 0; b < d; ++b) {
+        const size_t k = static_cast<size_t>(a * d + b);
+        out.hessian[k] = f.hessian[k].cwiseProduct(g.value) + f.value.cwiseProduct(g.hessian[k]) +
+                         f.gradient.col(a).cwiseProduct(g.gradient.col(b)) +
+                         f.gradient.col(b).cwiseProduct(g.gradient.col(a));
+      }
+  }
+  return out;
+}
+
+Jet Jet::operator+(const Jet& g) const {
+  Jet out;
+  out.value = value + g.value;
+  out.gradient = gradient + g.gradient;
+  if (!hessian.empty() && !g.hessian.empty()) {
+    out.hessian.resize(hessian.size());
+    for (size_t k = 0; k < hessian.size(); ++k) out.hessian[k] = hessian[k] + g.hessian[k];
+  }
+  return out;
+}
+
+Ansatz::Ansatz(const Domain& domain, int channels, std::optional<Dirichlet> dirichlet,
+               std::optional<Initial> initial)
+    : domain_(domain), channels_(channels), dirichlet_(std::move(dirichlet)),
+      initial_(std::move(initial)) {
+  if (initial_ && !domain_.has_time())
+    throw std::invalid_argument("Ansatz: hard initial conditions need a time interval");
+}
+
+Jet Ansatz::expression_jet(const io::Expression& e, const Eigen::MatrixXd& x, bool second,
+                           bool frozen_time) const {
+  const Eigen::Index n = x.rows();
+  const int d = domain_.input_dim();
+  Eigen::MatrixXd base = x;
+  if (frozen_time) base.col(domain_.time_column()).setConstant(domain_.time().first);
+  Jet jet = Jet::constant(n, d, 0.0);
+  if (!second) jet.hessian.clear();
+  jet.value = e.evaluate(base);
+  if (e.is_constant()) return jet;
+
+  const std::vector<std::string> names = domain_.input_names();
+  const Eigen::VectorXd extent = domain_.input_upper() - domain_.input_lower();
+  std::vector<int> axes;
+  for (int a = 0; a < d; ++a)
+    if (e.uses(names[a]) && !(frozen_time && a == domain_.time_column())) axes.push_back(a);
+  const Eigen::VectorXd h = 1e-3 * extent;
+  // Offsets −2, −1, 1, 2 and the 4th-order first-derivative weights (× 1/12h).
+  static constexpr int kOffsets[4] = {-2, -1, 1, 2};
+  static constexpr double kFirst[4] = {1.0 / 12, -8.0 / 12, 8.0 / 12, -1.0 / 12};
+  static constexpr double kSecond[4] = {-1.0 / 12, 16.0 / 12, 16.0 / 12, -1.0 / 12};
+  Eigen::MatrixXd shifted(n, base.cols());
+  for (int a : axes) {
+    Eigen::VectorXd first = Eigen::VectorXd::Zero(n), diag = -2.5 * jet.value;  // −30/12 f0
+    for (int k = 0; k < 4; ++k) {
+      shifted = base;
+      shifted.col(a).array() += kOffsets[k] * h(a);
+      const Eigen::VectorXd f = e.evaluate(shifted);
+      first += kFirst[k] * f;
+      diag += kSecond[k] * f;
+    }
+    jet.gradient.col(a) = first / h(a);
+    if (second) jet.hessian[static_cast<size_t>(a * d + a)] = diag / (h(a) * h(a));
+  }
+  if (second)
+    for (size_t p = 0; p < axes.size(); ++p)
+      for (size_t q = p + 1; q < axes.size(); ++q) {
+        const int a = axes[p], b = axes[q];
+        Eigen::VectorXd mixed = Eigen::VectorXd::Zero(n);
+        for (int i = 0; i < 4; ++i)
+          for (int j = 0; j < 4; ++j) {
+            shifted = base;
+            shifted.col(a).array() += kOffsets[i] * h(a);
+            shifted.col(b).array() += kOffsets[j] * h(b);
+            mixed += (kFirst[i] * kFirst[j]) * e.evaluate(shifted);
+          }
+        mixed /= h(a) * h(b);
+        jet.hessian[static_cast<size_t>(a * d + b)] = mixed;
+        jet.hessian[static_cast<size_t>(b * d + a)] = mixed;
+      }
+  return jet;
+}
+
+namespace {
+
+// The linear function s·(x_a − c) as a jet.
+Jet linear_jet(const Eigen::MatrixXd& x, int d, int axis, double c, double s, bool second) {
+  Jet j = Jet::constant(x.rows(), d, 0.0);
+  if (!second) j.hessian.clear();
+  j.value = s * (x.col(axis).array() - c).matrix();
+  j.gradient.col(axis).setConstant(s);
+  return j;
+}
+
+}  // namespace
+
+std::vector<Jet> Ansatz::base_jets(const Eigen::MatrixXd& x, bool second) const {
+  std::vector<Jet> out;
+  const int d = domain_.input_dim();
+  for (int c = 0; c < channels_; ++c) {
+    if (initial_) {
+      Jet jet = expression_jet(initial_->value[c], x, second, true);
+      if (initial_->velocity) {
+        const Jet tau = linear_jet(x, d, domain_.time_column(), domain_.time().first, 1.0, second);
+        jet = jet + tau * expression_jet((*initial_->velocity)[c], x, second, true);
+      }
+      out.push_back(std::move(jet));
+    } else if (dirichlet_) {
+      out.push_back(expression_jet(dirichlet_->values[c], x, second, false));
+    } else {
+      Jet zero = Jet::constant(x.rows(), d, 0.0);
+      if (!second) zero.hessian.clear();
+      out.push_back(std::move(zero));
+    }
+  }
+  return out;
+}
+
+Jet Ansatz::factor_jet(const Eigen::MatrixXd& x, bool second) const {
+  const int d = domain_.input_dim();
+  Jet jet = Jet::constant(x.rows(), d, 1.0);
+  if (!second) jet.hessian.clear();
+  if (dirichlet_)
+    for (const Face& f : dirichlet_->faces) {
+      const double lo = domain_.lower()[f.axis], hi = domain_.upper()[f.axis];
+      jet = jet * (f.upper ? linear_jet(x, d, f.axis, hi, -1.0 / (hi - lo), second)
+                           : linear_jet(x, d, f.axis, lo, 1.0 / (hi - lo), second));
+    }
+  if (initial_) {
+    const auto [t0, t1] = domain_.time();
+    const int t = domain_.time_column();
+    if (initial_->time_scale > 0) {
+      // ψ = tanh(τ/s): ψ' = (1 − ψ²)/s, ψ'' = −2ψ(1 − ψ²)/s².
+      const double s = initial_->time_scale;
+      Jet psi = Jet::constant(x.rows(), d, 0.0);
+      if (!second) psi.hessian.clear();
+      psi.value = ((x.col(t).array() - t0) / s).tanh().matrix();
+      const Eigen::ArrayXd q = psi.value.array(), one_minus = 1.0 - q.square();
+      psi.gradient.col(t) = (one_minus / s).matrix();
+      if (second) psi.hessian[static_cast<size_t>(t * d + t)] = (-2.0 * q * one_minus / (s * s)).matrix();
+      jet = jet * psi;
+      if (initial_->velocity) jet = jet * psi;
+    } else {
+      const Jet tau = linear_jet(x, d, t, t0, 1.0 / (t1 - t0), second);
+      jet = jet * tau;
+      if (initial_->velocity) jet = jet * tau;
+    }
+  }
+  return jet;
+}
+
+namespace {
+
+void fill_streams(const StreamLayout& layout, const std::vector<Eigen::MatrixXd>& kernels,
+                  const Jet& jet, int channel, Streams<double>& s) {
+  const Eigen::MatrixXd& v = layout.spec().tangents;
+  const Eigen::Index d = jet.gradient.cols();
+  s.stream(0).col(channel) = jet.value;
+  for (int i = 0; i < layout.tangents(); ++i)
+    s.stream(layout.tangent(i)).col(channel) = jet.gradient * v.col(i);
+  for (int q = 0; q < layout.operators(); ++q) {
+    auto col = s.stream(layout.op(q)).col(channel);
+    col.setZero();
+    for (Eigen::Index a = 0; a < d; ++a)
+      for (Eigen::Index b = 0; b < d; ++b)
+        if (kernels[q](a, b) != 0) col += kernels[q](a, b) * jet.hessian[static_cast<size_t>(a * d + b)];
+  }
+}
+
+}  // namespace
+
+AnsatzStreams Ansatz::streams(const StreamLayout& layout, const Eigen::MatrixXd& x) const {
+  if (layout.taylor_dirs() > 0)
+    throw std::invalid_argument(
+        "hard conditions (enforce: hard) do not support Taylor streams (derivatives of order > "
+        "2); use enforce: soft for this problem");
+  if (layout.input_dim() != domain_.input_dim() || x.cols() != domain_.input_dim())
+    throw std::invalid_argument("Ansatz: points have " + std::to_string(x.cols()) +
+                                " columns, the domain " + std::to_string(domain_.input_dim()));
+  const bool second = layout.operators() > 0;
+  const Eigen::MatrixXd& v = layout.spec().tangents;
+  std::vector<Eigen::MatrixXd> kernels;  // V C Vᵀ: the operator in input coordinates
+  for (int q = 0; q < layout.operators(); ++q)
+    kernels.push_back(v * layout.spec().operators[q] * v.transpose());
+  AnsatzStreams s;
+  const Eigen::Index n = x.rows();
+  s.base.resize(n, layout.count(), channels_);
+  s.factor.resize(n, layout.count(), 1);
+  const std::vector<Jet> base = base_jets(x, second);
+  for (int c = 0; c < channels_; ++c) fill_streams(layout, kernels, base[c], c, s.base);
+  fill_streams(layout, kernels, factor_jet(x, second), 0, s.factor);
+  return s;
+}
+
+void Ansatz::apply(const StreamLayout& layout, const AnsatzStreams& s, Eigen::Index first,
+                   const Streams<double>& n, Streams<double>& u) const {
+  const Eigen::Index p = n.points;
+  u.resize(p, n.count, n.width());
+  auto A = [&](int k) { return s.base.stream(k).middleRows(first, p); };
+  auto D = [&](int k) { return s.factor.stream(k).col(0).segment(first, p).array(); };
+  const auto n0 = n.stream(0).array();
+  const auto d0 = D(0);
+  u.stream(0) = A(0).array() + n0.colwise() * d0;
+  for (int i = 0; i < layout.tangents(); ++i) {
+    const int k = layout.tangent(i);
+    u.stream(k) = A(k).array() + n0.colwise() * D(k) + n.stream(k).array().colwise() * d0;
+  }
+  for (int q = 0; q < layout.operators(); ++q) {
+    const int k = layout.op(q);
+    auto out = u.stream(k);
+    out = A(k).array() + n0.colwise() * D(k) + n.stream(k).array().colwise() * d0;
+    const Eigen::MatrixXd& c = layout.spec().operators[q];
+    for (int i = 0; i < layout.tangents(); ++i)
+      for (int j = 0; j < layout.tangents(); ++j)
+        if (c(i, j) != 0)
+          out.array() += (2.0 * c(i, j)) *
+                         (n.stream(layout.tangent(j)).array().colwise() * D(layout.tangent(i)));
+  }
+}
+
+void Ansatz::adjoint(const StreamLayout& layout, const AnsatzStreams& s, Eigen::Index first,
+                     const Streams<double>& u_bar, Streams<double>& n_bar) const {
+  const Eigen::Index p = u_bar.points;
+  auto D = [&](int k) { return s.factor.stream(k).col(0).segment(first, p).array(); };
+  const auto d0 = D(0);
+  auto n0 = n_bar.stream(0);
+  n0.array() += u_bar.stream(0).array().colwise() * d0;
+  for (int i = 0; i < layout.tangents(); ++i) {
+    const int k = layout.tangent(i);
+    n0.array() += u_bar.stream(k).array().colwise() * D(k);
+    n_bar.stream(k).array() += u_bar.stream(k).array().colwise() * d0;
+  }
+  for (int q = 0; q < layout.operators(); ++q) {
+    const int k = layout.op(q);
+    const auto ub = u_bar.stream(k).array();
+    n0.array() += ub.colwise() * D(k);
+    n_bar.stream(k).array() += ub.colwise() * d0;
+    const Eigen::MatrixXd& c = layout.spec().operators[q];
+    for (int i = 0; i < layout.tangents(); ++i)
+      for (int j = 0; j < layout.tangents(); ++j)
+        if (c(i, j) != 0)
+          n_bar.stream(layout.tangent(j)).array() +=
+              (2.0 * c(i, j)) * (ub.colwise() * D(layout.tangent(i)));
+  }
+}
+
+Eigen::MatrixXd Ansatz::values(const Eigen::MatrixXd& x, const Eigen::MatrixXd& network_values) const {
+  const StreamLayout layout(autodiff::StreamSpec::values(domain_.input_dim()));
+  const AnsatzStreams s = streams(layout, x);
+  Streams<double> n, u;
+  n.points = x.rows();
+  n.count = 1;
+  n.data = network_values;
+  apply(layout, s, 0, n, u);
+  return u.data;
+}
+
+AnsatzResidual::AnsatzResidual(std::shared_ptr<const Ansatz> ansatz, std::unique_ptr<Residual> inner,
+                               const StreamLayout& layout, const Eigen::MatrixXd& points)
+    : ansatz_(std::move(ansatz)), inner_(std::move(inner)), streams_(ansatz_->streams(layout, points)) {}
+
+void AnsatzResidual::evaluate(Eigen::Index first, const StreamLayout& layout,
+                              const Streams<double>& out, Eigen::MatrixXd& r) const {
+  Streams<double> u;
+  ansatz_->apply(layout, streams_, first, out, u);
+  inner_->evaluate(first, layout, u, r);
+}
+
+void AnsatzResidual::backward(Eigen::Index first, const StreamLayout& layout,
+                              const Streams<double>& out, const Eigen::MatrixXd& r_bar,
+                              Streams<double>& adjoint) const {
+  Streams<double> u, u_bar;
+  ansatz_->apply(layout, streams_, first, out, u);
+  u_bar.points = u.points;
+  u_bar.count = u.count;
+  u_bar.data.setZero(u.data.rows(), u.data.cols());
+  inner_->backward(first, layout, u, r_bar, u_bar);
+  ansatz_->adjoint(layout, streams_, first, u_bar, adjoint);
+}
+
+std::vector<LossTerm> with_ansatz(std::vector<LossTerm> terms, std::shared_ptr<const Ansatz> ansatz) {
+  if (!ansatz) return terms;
+  for (LossTerm& term : terms) {
+    if (term.spec.taylor_order > 0)
+      throw std::invalid_argument("loss term '" + term.name +
+                                  "' uses Taylor streams (derivatives of order > 2), which hard "
+                                  "conditions (enforce: hard) do not support; use enforce: soft");
+    auto inner = std::move(term.residual);
+    term.residual = [ansatz, inner = std::move(inner), spec = term.spec](const TermPoints& points) {
+      if (!points.groups.empty())
+        throw std::invalid_argument("hard conditions (enforce: hard) apply to per-point loss terms only");
+      return std::make_unique<AnsatzResidual>(ansatz, inner(points), StreamLayout(spec), points.x);
+    };
+  }
+  return terms;
+}
+
+NetworkStreams with_ansatz(NetworkStreams network, std::shared_ptr<const Ansatz> ansatz) {
+  if (!ansatz) return network;
+  return [network = std::move(network), ansatz](const StreamLayout& layout, const Eigen::MatrixXd& x) {
+    const Streams<double> n = network(layout, x);
+    Streams<double> u;
+    ansatz->apply(layout, ansatz->streams(layout, x), 0, n, u);
+    return u;
+  };
+}
+
+// ---- config ------------------------------------------------------------------------
+
+namespace {
+
+std::vector<std::string> texts(const std::vector<io::Expression>& e) {
+  std::vector<std::string> out;
+  for (const auto& x : e) out.push_back(x.text());
+  return out;
+}
+
+// Largest |a − b| over points, with the point where it occurs.
+double max_mismatch(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b, Eigen::Index& where) {
+  Eigen::Index col;
+  return (a - b).cwiseAbs().maxCoeff(&where, &col);
+}
+
+std::string point_text(const Eigen::MatrixXd& x, Eigen::Index r) {
+  std::ostringstream s;
+  s << "(";
+  for (Eigen::Index c = 0; c < x.cols(); ++c) s << (c ? ", " : "") << x(r, c);
+  s << ")";
+  return s.str();
+}
+
+}  // namespace
+
+std::shared_ptr<const Ansatz> read_ansatz(const io::ConfigNode& conditions, const Domain& domain,
+                                          int output_dim) {
+  if (conditions.is_null() || !conditions.is_sequence()) return nullptr;
+  std::optional<Ansatz::Dirichlet> dirichlet;
+  std::optional<io::ConfigNode> dirichlet_item, value_item, velocity_item;
+  std::vector<io::Expression> u0, v0;
+  double time_scale = 0;
+  for (std::size_t i = 0; i < conditions.size(); ++i) {
+    const io::ConfigNode item = conditions.at(i);
+    if (item.get_choice("enforce", {"soft", "hard"}, "soft") != "hard") continue;
+    item.require("weight", !item.has("weight"),
+                 "a hard condition (enforce: hard) is no loss term and takes no weight");
+    const bool initial = item.has("on") && !item.yaml()["on"].IsSequence() &&
+                         Registry<int>::lower(item.get<std::string>("on")) == "initial";
+    const auto values = channel_expressions(item, "value", domain, output_dim);
+    if (initial) {
+      if (!domain.has_time()) throw item.error("on", "'initial' needs a domain with a time interval");
+      const std::string type = item.get_choice("type", {"value", "velocity"});
+      auto& slot = type == "value" ? value_item : velocity_item;
+      if (slot) throw item.error("enforce", "a second hard initial " + type + " condition");
+      slot = item;
+      (type == "value" ? u0 : v0) = values;
+      if (type == "value" && item.has("time_scale"))
+        time_scale = item.get_positive<double>("time_scale");
+    } else {
+      const std::string type = item.get_choice("type", {"dirichlet", "neumann"});
+      if (type == "neumann")
+        throw item.error("enforce",
+                         "a Neumann condition cannot be hard (only dirichlet and initial "
+                         "value/velocity can); use enforce: soft");
+      const std::vector<Face> faces = condition_faces(item, domain);
+      if (!dirichlet) {
+        dirichlet = Ansatz::Dirichlet{{}, values};
+        dirichlet_item = item;
+      } else if (texts(values) != texts(dirichlet->values)) {
+        throw item.error("value", "hard Dirichlet conditions must all carry the same value (this "
+                                  "one differs from the hard one at line " +
+                                      std::to_string(dirichlet_item->mark().line + 1) +
+                                      "); make one of them soft");
+      }
+      for (const Face& f : faces)
+        if (std::none_of(dirichlet->faces.begin(), dirichlet->faces.end(),
+                         [&](const Face& g) { return g.axis == f.axis && g.upper == f.upper; }))
+          dirichlet->faces.push_back(f);
+    }
+  }
+  if (velocity_item && !value_item)
+    throw velocity_item->error("enforce",
+                               "a hard initial velocity needs the initial value hard too");
+  std::optional<Ansatz::Initial> initial;
+  if (value_item) {
+    initial = Ansatz::Initial{u0, std::nullopt, time_scale};
+    if (velocity_item) initial->velocity = v0;
+  }
+  if (!dirichlet && !initial) return nullptr;
+
+  if (dirichlet && initial) {
+    // u = u0 + τ v0 + φ (τ/T)² N equals g on the faces only for compatible data.
+    for (const auto& g : dirichlet->values)
+      if (g.uses("t"))
+        throw dirichlet_item->error(
+            "value", "a hard Dirichlet value that depends on t cannot be combined with hard "
+                     "initial conditions; make one of them soft");
+    Random rng(0);
+    Eigen::MatrixXd x = domain.sample_faces(dirichlet->faces, rng, 256);
+    x.col(domain.time_column()).setConstant(domain.time().first);
+    const Eigen::MatrixXd g = evaluate_channels(dirichlet->values, x);
+    const Eigen::MatrixXd a = evaluate_channels(u0, x);
+    Eigen::Index where = 0;
+    const double tol = 1e-8 * (1.0 + std::max(g.cwiseAbs().maxCoeff(), a.cwiseAbs().maxCoeff()));
+    const double miss = max_mismatch(a, g, where);
+    if (!(miss <= tol))
+      throw value_item->error("value", "the hard initial value must equal the hard Dirichlet value "
+                                       "on the hard faces at t0; they differ by " +
+                                           std::to_string(miss) + " at " + point_text(x, where));
+    if (initial->velocity) {
+      const Eigen::MatrixXd v = evaluate_channels(v0, x);
+      const double vmiss = max_mismatch(v, Eigen::MatrixXd::Zero(v.rows(), v.cols()), where);
+      if (!(vmiss <= 1e-8 * (1.0 + v.cwiseAbs().maxCoeff())))
+        throw velocity_item->error("value", "the hard initial velocity must vanish on the hard "
+                                            "Dirichlet faces (their value is constant in t); it is " +
+                                                std::to_string(vmiss) + " at " + point_text(x, where));
+    }
+  }
+  return std::make_shared<const Ansatz>(domain, output_dim, std::move(dirichlet), std::move(initial));
+}
+
+}  // namespace nfield::solvers

@@ -1,0 +1,167 @@
+// SPDX-License-Identifier: MIT
+#include "solvers/output/grid_output.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "io/grid.h"
+#include "io/png_image.h"
+#include "io/pvd.h"
+#include "io/vtk_image.h"
+
+namespace nfield::solvers {
+namespace {
+
+struct Frame {
+  io::PointArrays arrays;
+  Eigen::MatrixXd u;
+};
+
+// Pads vectors of 2 components to 3 so ParaView's glyphs and stream tracers take them.
+Eigen::MatrixXd as_vtk_vector(const Eigen::MatrixXd& v) {
+  if (v.cols() != 2) return v;
+  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(v.rows(), 3);
+  out.leftCols(2) = v;
+  return out;
+}
+
+// The evaluation points of frame k: the space grid, at the frame's time when there is one.
+Eigen::MatrixXd frame_points(const Domain& domain, const Eigen::MatrixXd& space, int k, int frames,
+                             double* t) {
+  Eigen::MatrixXd x(space.rows(), domain.input_dim());
+  x.leftCols(domain.space_dim()) = space;
+  *t = 0;
+  if (domain.has_time()) {
+    const auto [t0, t1] = domain.time();
+    *t = frames > 1 ? t0 + (t1 - t0) * k / (frames - 1) : t0;
+    x.col(domain.time_column()).setConstant(*t);
+  }
+  return x;
+}
+
+// Sums of |u − u*|² and |u*|² over the points the problem's error mask keeps.
+struct ErrorSums {
+  double error_sq = 0, exact_sq = 0, max_abs = 0;
+  void add(const Eigen::MatrixXd& error, const Eigen::MatrixXd& exact,
+           const Eigen::Array<bool, Eigen::Dynamic, 1>& mask) {
+    for (Eigen::Index i = 0; i < error.rows(); ++i)
+      if (mask(i)) {
+        error_sq += error.row(i).squaredNorm();
+        exact_sq += exact.row(i).squaredNorm();
+        max_abs = std::max(max_abs, error.row(i).cwiseAbs().maxCoeff());
+      }
+  }
+  double rel_l2() const { return exact_sq > 0 ? std::sqrt(error_sq / exact_sq) : std::sqrt(error_sq); }
+};
+
+}  // namespace
+
+GridMetrics grid_error(const Problem& problem, const StreamEvaluator& evaluate,
+                       const OutputOptions& output) {
+  GridMetrics metrics;
+  if (!problem.has_exact()) return metrics;
+  const Domain& domain = problem.domain();
+  const io::Grid grid = io::make_grid(domain.lower(), domain.upper(), output.grid);
+  const Eigen::MatrixXd space = grid.points(domain.space_dim());
+  const autodiff::StreamLayout layout(autodiff::StreamSpec::values(domain.input_dim()));
+  const int frames = domain.has_time() ? output.frames : 1;
+  ErrorSums sums;
+  for (int k = 0; k < frames; ++k) {
+    double t;
+    const Eigen::MatrixXd x = frame_points(domain, space, k, frames, &t);
+    const Eigen::MatrixXd exact = problem.exact(x);
+    sums.add(evaluate(layout, x).stream(0) - exact, exact, problem.error_mask(x));
+  }
+  metrics.has_error = true;
+  metrics.rel_l2 = sums.rel_l2();
+  metrics.max_abs_err = sums.max_abs;
+  return metrics;
+}
+
+GridMetrics write_grid_outputs(const Problem& problem, const StreamEvaluator& evaluate,
+                               const OutputOptions& output) {
+  const Domain& domain = problem.domain();
+  const int d = domain.space_dim(), channels = problem.output_dim();
+  const io::Grid grid = io::make_grid(domain.lower(), domain.upper(), output.grid);
+  const Eigen::MatrixXd space = grid.points(d);
+  const Eigen::Index n = space.rows();
+  const std::vector<std::string> names = problem.output_names();
+  const int frames = domain.has_time() ? output.frames : 1;
+
+  autodiff::StreamSpec gradient_spec = autodiff::StreamSpec::values(domain.input_dim());
+  gradient_spec.tangents = Eigen::MatrixXd::Identity(domain.input_dim(), d);
+  const autodiff::StreamLayout gradient_layout(gradient_spec);
+  std::vector<LossTerm> terms = problem.loss_terms();
+  const int residual_index = problem.residual_term();
+
+  GridMetrics metrics;
+  ErrorSums sums;
+  double residual_sq = 0;
+  Eigen::Index residual_count = 0;
+  io::PvdCollection pvd(output.dir / "solution.pvd");
+  Eigen::MatrixXd xt_image(frames, grid.dims[0]);  // 1D + time preview
+  for (int k = 0; k < frames; ++k) {
+    double t;
+    const Eigen::MatrixXd x = frame_points(domain, space, k, frames, &t);
+    io::PointArrays arrays;
+    const autodiff::Streams<double> streams = evaluate(gradient_layout, x);
+    const Eigen::MatrixXd u = streams.stream(0);
+    for (int c = 0; c < channels; ++c) {
+      arrays[names[c]] = u.col(c);
+      Eigen::MatrixXd g(n, d);
+      for (int a = 0; a < d; ++a) g.col(a) = streams.stream(1 + a).col(c);
+      arrays["grad_" + names[c]] = as_vtk_vector(g);
+    }
+    if (channels == 2) arrays["abs_u"] = u.rowwise().norm();
+    if (residual_index >= 0) {
+      const LossTerm& term = terms[residual_index];
+      const autodiff::StreamLayout layout(term.spec);
+      const auto residual = term.residual(x);
+      Eigen::MatrixXd r;
+      residual->evaluate(0, layout, evaluate(layout, x), r);
+      arrays["residual"] = r;
+      residual_sq += r.squaredNorm();
+      residual_count += r.rows();
+    }
+    if (problem.has_exact()) {
+      const Eigen::MatrixXd exact = problem.exact(x);
+      const Eigen::MatrixXd error = u - exact;
+      sums.add(error, exact, problem.error_mask(x));
+      for (int c = 0; c < channels; ++c) {
+        arrays["exact_" + names[c]] = exact.col(c);
+        arrays["error_" + names[c]] = error.col(c);
+      }
+      metrics.has_error = true;
+    }
+    if (domain.has_time()) {
+      char file[64];
+      std::snprintf(file, sizeof file, "frame_%04d.vti", k);
+      io::write_vti(output.dir / file, grid, arrays);
+      pvd.add(t, file);
+      if (d == 1) xt_image.row(frames - 1 - k) = u.col(0).transpose();
+    } else {
+      io::write_vti(output.dir / "solution.vti", grid, arrays);
+    }
+    if (output.png && k == 0 && d >= 2) {
+      // Row 0 of the picture is the top (largest y); 3D: the middle z slice.
+      const int nx = grid.dims[0], ny = grid.dims[1];
+      const Eigen::Index slice = d == 3 ? static_cast<Eigen::Index>(grid.dims[2] / 2) * nx * ny : 0;
+      Eigen::MatrixXd image(ny, nx);
+      for (int j = 0; j < ny; ++j)
+        for (int i = 0; i < nx; ++i) image(ny - 1 - j, i) = u(slice + i + nx * j, 0);
+      io::write_scalar_png(output.dir / "solution.png", image, {std::nullopt, io::Colormap::kViridis});
+    }
+  }
+  if (domain.has_time()) pvd.write();
+  if (output.png && domain.has_time() && d == 1)
+    io::write_scalar_png(output.dir / "solution.png", xt_image, {std::nullopt, io::Colormap::kViridis});
+  if (metrics.has_error) {
+    metrics.rel_l2 = sums.rel_l2();
+    metrics.max_abs_err = sums.max_abs;
+  }
+  if (residual_count > 0) metrics.residual_rms = std::sqrt(residual_sq / residual_count);
+  return metrics;
+}
+
+}  // namespace nfield::solvers

@@ -1,0 +1,146 @@
+// SPDX-License-Identifier: MIT
+//
+// The training loop: optimizer stages run one after another over a problem's loss terms.
+// Each stage's optimizer is an object made from the optimizer registry
+// (solvers/training/optimizer.h; adam, lbfgs and lm are described in solvers/training/optimizers.h); the
+// trainer runs it through a TrainingStage and knows none by name.
+//
+// A stage that stops early because its optimizer cannot decrease the loss further
+// (converged) counts as finished, with all its steps.
+//
+// A run is reproducible from its seed and thread count. The whole state (parameters, Adam
+// moments and step, stage and step counters, random engine, current points) is saved by
+// save_state and restored by load_state, so an interrupted Adam run resumed from its
+// checkpoint ends with the same parameters, bit for bit, as one never interrupted.
+// (An L-BFGS or LM stage restarts its history, and draws new points, when resumed.)
+//
+// training.sampler, adaptive, balance and causal (solvers/training/sampler.h, loss_balancing.h) hook
+// in here: each term draws through its own quasi-random sequence; every adaptive.every Adam
+// steps the PDE term's extra set is refined and the points redrawn; each Adam step first
+// computes the causal slice weights at the current parameters; every balance.every Adam steps
+// the terms' gradients are taken one by one to update λ. Their state (sequence counts, extra
+// set, λ) is part of save_state, so resumed runs still match uninterrupted ones.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "fields/field.h"
+#include "io/hdf5_file.h"
+#include "solvers/training/loss_balancing.h"
+#include "solvers/training/optimizer.h"
+#include "solvers/problem.h"
+#include "solvers/training/training_options.h"
+
+namespace nfield::solvers {
+
+struct Progress {
+  int stage = 0;
+  std::string optimizer;
+  long step = 0;         // steps done, over all stages
+  long total_steps = 0;
+  double learning_rate = 0;
+  double loss = 0;
+  std::vector<std::string> term_names;
+  std::vector<double> term_losses;
+  double steps_per_second = 0;  // over the current stage so far
+  double eta_seconds = 0;       // the remaining steps of all stages at that rate
+  std::vector<std::pair<std::string, double>> extras;  // e.g. the minimum causal weight
+};
+
+template <typename Scalar>
+class Trainer {
+ public:
+  struct Callbacks {
+    std::function<bool()> stop_requested;           // polled every step
+    std::function<void(const Progress&)> progress;  // after every step
+    // When a stage starts, with the counters and losses so far (a stage's first step can be
+    // long: a Levenberg–Marquardt Jacobian).
+    std::function<void(const Progress&)> stage_begins;
+    std::function<void()> checkpoint;               // every checkpoint_every steps
+    // After each stage: the error against the exact solution then (NaN: none), kept per
+    // stage in stage_errors() and in the checkpoint.
+    std::function<double()> stage_error;
+  };
+
+  Trainer(const Problem& problem, fields::Field<Scalar>& field, TrainingOptions options);
+  ~Trainer();
+
+  // Runs the remaining stages. Returns false when stopped by stop_requested.
+  bool run(const Callbacks& callbacks);
+
+  const std::vector<std::string>& term_names() const { return names_; }
+  // Loss of each term at the last step (weighted).
+  const std::vector<double>& term_losses() const { return losses_; }
+  long step() const { return global_step_; }
+  const std::vector<double>& step_milliseconds() const { return step_ms_; }
+  // Final loss after each finished stage, in order.
+  const std::vector<double>& stage_losses() const { return stage_losses_; }
+  const std::vector<double>& stage_errors() const { return stage_errors_; }
+  // Wall seconds of each finished stage (NaN for stages finished before a resume).
+  const std::vector<double>& stage_seconds() const { return stage_seconds_; }
+
+  // Sampling and balancing state, for metrics.json and tests.
+  std::vector<std::pair<std::string, double>> extra_metrics() const;
+  const Eigen::MatrixXd& points(size_t term) const { return points_[term].x; }
+  const Eigen::MatrixXd& adaptive_points() const { return adaptive_points_; }
+  const std::vector<double>& balance_weights() const { return balance_; }
+  const CausalWeights& causal_weights() const { return causal_; }
+
+  void save_state(io::H5Writer& file) const;
+  void load_state(const io::H5Reader& file);
+
+ private:
+  friend class TrainingStage<Scalar>;
+
+  void resample();
+  double loss_and_gradient(const Scalar* params, Scalar* gradient);
+  double term_loss(size_t k, const Scalar* params, double weight, Scalar* gradient);
+  Eigen::VectorXd squared_residuals(size_t k, const Eigen::MatrixXd& x, const Residual& r) const;
+  void refine();
+  // Tells the field and the terms that stage_ starts and rebuilds the residuals of the terms
+  // that listen.
+  void begin_stage();
+  // See TrainingStage (solvers/training/optimizer.h).
+  void prepare_step();
+  int segment_length(int resample_every, bool with_causal) const;
+  bool ends_after_segment(int segment, int segment_start, bool early) const;
+  void renew_points(int resample_every);
+  void finish_step(double learning_rate, double milliseconds);
+  // Puts the RAR set behind the PDE term's own points of the stage.
+  void join_adaptive_points();
+  void update_causal();
+  void balanced_gradient(Scalar* gradient);
+  Progress progress(double lr) const;
+
+  const Problem& problem_;
+  fields::Field<Scalar>& field_;
+  TrainingOptions options_;
+  std::vector<LossTerm> terms_;
+  std::vector<std::string> names_;
+  std::vector<autodiff::StreamLayout> layouts_;
+  std::vector<TermPoints> points_;
+  std::vector<autodiff::Matrix<Scalar>> points_scalar_;
+  std::vector<autodiff::Matrix<Scalar>> tangents_scalar_;  // empty: the spec's tangents
+  std::vector<std::unique_ptr<Residual>> residuals_;
+  std::vector<double> losses_, stage_losses_, stage_errors_, stage_seconds_, step_ms_;
+  std::unique_ptr<Optimizer> optimizer_;  // of the current stage, while it runs or resumes
+  const Callbacks* callbacks_ = nullptr;  // of the current run()
+  double time_budget_ = 0;                // of the current stage (TrainingStage::set_time_budget)
+  Random rng_;
+  int stage_ = 0;
+  int stage_step_ = 0;
+  long global_step_ = 0;
+  double stage_started_ = 0;     // wall clock and global step at the start of the stage
+  long stage_started_step_ = 0;  // (or of the resumed part of it)
+  int pde_ = -1;                          // the problem's residual term
+  std::vector<UnitSequence> sequences_;   // one per term (none for uniform sampling)
+  Eigen::MatrixXd adaptive_points_;       // RAR extra set, appended to the PDE batch
+  Eigen::Index previous_adaptive_rows_ = 0;  // rows of it behind the current PDE points
+  std::vector<double> balance_;           // λ per term (1 unless grad_norm)
+  CausalWeights causal_;
+};
+
+}  // namespace nfield::solvers
