@@ -2,8 +2,12 @@
 //
 // JetResidual (solvers/jet_residual.h): on a functor with a closed-form derivative, backward
 // adds r̄ᵀ ∂r/∂z into the entries its reads name (other streams and channels untouched) and
-// takes the per-point data of point first + row; the guards give the subgradient 0 where
-// sqrt and abs have no derivative.
+// takes the per-point data of point first + row. The eikonal residual (every kind and form,
+// 2D and 3D, plain and factored) and the SDF residuals (surface and interior, siren and
+// squares), now written once through it, give the values and adjoints of the hand-written
+// residuals they replace (eikonal_reference.h, sdf_reference.h) to 1e-12, on random streams
+// and at the points where the hand-written ones took a subgradient (∇u = 0, u = 0, x = x₀),
+// and their adjoints equal central differences of their values.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -12,6 +16,8 @@
 #include <string>
 
 #include "solvers/jet_residual.h"
+#include "tests/solvers/eikonal_reference.h"
+#include "tests/solvers/sdf_reference.h"
 
 namespace nfield::solvers {
 namespace {
@@ -99,6 +105,144 @@ TEST(JetResidual, GuardsGiveTheSubgradientZeroWhereSqrtAndAbsHaveNone) {
   EXPECT_NEAR(five.v(0), 0.6, 1e-15);
   EXPECT_NEAR(five.v(1), -0.8, 1e-15);
   EXPECT_EQ(abs_or_flat(Jet(-2.0, 2)).v(2), -1);
+}
+
+// Largest |a − b| / (1 + |b|) over the entries.
+double relative_gap(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
+  EXPECT_EQ(a.rows(), b.rows());
+  EXPECT_EQ(a.cols(), b.cols());
+  EXPECT_TRUE(a.allFinite());
+  return ((a - b).array().abs() / (1 + b.array().abs())).maxCoeff();
+}
+
+double pairing(const Residual& residual, Eigen::Index first, const StreamLayout& layout,
+               const autodiff::Streams<double>& out, const Eigen::MatrixXd& r_bar) {
+  Eigen::MatrixXd r;
+  residual.evaluate(first, layout, out, r);
+  return (r.array() * r_bar.array()).sum();
+}
+
+// The new residual against the hand-written one on `out` (values and adjoints, 1e-12), and
+// with `central_differences` its adjoint against central differences of its values.
+void compare(const Residual& jet, const Residual& reference, const StreamLayout& layout,
+             Eigen::Index first, const autodiff::Streams<double>& out, std::mt19937_64& rng,
+             bool central_differences) {
+  ASSERT_EQ(jet.components(), reference.components());
+  Eigen::MatrixXd r, r_reference;
+  jet.evaluate(first, layout, out, r);
+  reference.evaluate(first, layout, out, r_reference);
+  EXPECT_LT(relative_gap(r, r_reference), 1e-12);
+  const Eigen::MatrixXd r_bar = random_matrix(out.points, jet.components(), rng);
+  autodiff::Streams<double> adjoint = out, adjoint_reference = out;  // added to, not set
+  jet.backward(first, layout, out, r_bar, adjoint);
+  reference.backward(first, layout, out, r_bar, adjoint_reference);
+  EXPECT_LT(relative_gap(adjoint.data, adjoint_reference.data), 1e-12);
+  if (!central_differences) return;
+  const double h = 1e-6;
+  double worst = 0;
+  for (Eigen::Index i = 0; i < out.data.size(); ++i) {
+    autodiff::Streams<double> plus = out, minus = out;
+    plus.data.data()[i] += h;
+    minus.data.data()[i] -= h;
+    const double fd =
+        (pairing(jet, first, layout, plus, r_bar) - pairing(jet, first, layout, minus, r_bar)) / (2 * h);
+    const double exact = adjoint.data.data()[i] - out.data.data()[i];
+    worst = std::max(worst, std::abs(fd - exact) / (1 + std::abs(fd)));
+  }
+  EXPECT_LT(worst, 1e-7);
+}
+
+struct EikonalForm {
+  EikonalKind kind;
+  double viscosity;
+  bool concave;
+  const char* name;
+};
+
+TEST(JetResidual, EikonalEqualsTheHandWrittenResidualInEveryForm) {
+  const EikonalForm forms[] = {
+      {EikonalKind::kEikonal, 0, false, "eikonal"},
+      {EikonalKind::kEikonal, 0.05, false, "eikonal, viscosity laplacian"},
+      {EikonalKind::kEikonal, 0.05, true, "eikonal, viscosity concave"},
+      {EikonalKind::kOutflow, 0, false, "outflow"},
+      {EikonalKind::kInterface, 0, false, "interface"},
+      {EikonalKind::kSource, 0, false, "source"},
+  };
+  std::mt19937_64 rng(7);
+  for (const int d : {2, 3}) {
+    for (const bool factored : {false, true}) {
+      for (const EikonalForm& form : forms) {
+        SCOPED_TRACE(std::string(form.name) + ", d = " + std::to_string(d) +
+                     (factored ? ", factored" : ", plain"));
+        const Eigen::Index set = 16, first = 5, n = set - first;
+        EikonalSetup setup;
+        setup.factored = factored;
+        setup.x0 = random_matrix(d, 1, rng, 0, 1).col(0);
+        setup.v0 = uniform(rng, 0.5, 2);
+        setup.viscosity = form.viscosity;
+        setup.concave = form.concave;
+        setup.length = uniform(rng, 1, 2);
+        setup.far_slowness = uniform(rng, 0.3, 1);
+        Eigen::MatrixXd points = random_matrix(set, d, rng, 0, 1);
+        points.row(first + 1) = setup.x0.transpose();  // T₀ = 0, ∇T₀ undefined (taken as 0)
+        Eigen::MatrixXd per_point;
+        if (form.kind == EikonalKind::kEikonal) {
+          per_point = random_matrix(set, 1, rng, 0.3, 2);
+        } else if (form.kind != EikonalKind::kSource) {
+          per_point = random_matrix(set, d, rng);
+          per_point.rowwise().normalize();
+        }
+        const auto jet = make_eikonal_residual(form.kind, points, per_point, setup);
+        const reference::EikonalResidual hand(form.kind, points, per_point, setup);
+        const autodiff::StreamSpec spec = form.kind == EikonalKind::kSource
+                                              ? autodiff::StreamSpec::values(d)
+                                          : form.viscosity > 0 ? autodiff::StreamSpec::laplacian(d)
+                                                               : autodiff::StreamSpec::gradient(d);
+        const StreamLayout layout(spec);
+        for (const int width : {1, 2}) {
+          const autodiff::Streams<double> out = random_streams(layout, n, width, rng);
+          compare(*jet, hand, layout, first, out, rng, true);
+        }
+        // ∇u = 0 (plain) and the tangential gradient 0 (interface): the subgradients.
+        autodiff::Streams<double> flat = random_streams(layout, n, 1, rng);
+        if (form.kind != EikonalKind::kSource) {
+          for (int a = 0; a < d; ++a) flat.stream(layout.tangent(a))(2, 0) = 0;
+          if (form.kind == EikonalKind::kInterface && !factored)
+            for (int a = 0; a < d; ++a)
+              flat.stream(layout.tangent(a))(3, 0) = -0.5 * per_point(first + 3, a);
+        }
+        compare(*jet, hand, layout, first, flat, rng, false);
+      }
+    }
+  }
+}
+
+TEST(JetResidual, SdfEqualsTheHandWrittenResidual) {
+  std::mt19937_64 rng(8);
+  const StreamLayout layout(autodiff::StreamSpec::gradient(3));
+  for (const bool absolute : {true, false}) {
+    for (const bool surface : {true, false}) {
+      SCOPED_TRACE(std::string(surface ? "surface" : "interior") + (absolute ? ", siren" : ", squares"));
+      SdfWeights weights;
+      weights.absolute = absolute;
+      weights.alpha = 3;  // so that exp(−α|u|/2) is not flat at random u
+      const Eigen::Index set = 14, first = 3, n = set - first;
+      Eigen::MatrixXd normals;
+      if (surface) {
+        normals = random_matrix(set, 3, rng);
+        normals.rowwise().normalize();
+      }
+      const auto jet = make_sdf_residual(normals, surface, weights);
+      const reference::SdfResidual hand(normals, surface, weights);
+      compare(*jet, hand, layout, first, random_streams(layout, n, 1, rng), rng, true);
+      // u = 0, ∇u = 0 and |∇u| = 1: where √|·|, |·| and ĝ take a subgradient.
+      autodiff::Streams<double> flat = random_streams(layout, n, 1, rng);
+      flat.stream(StreamLayout::value())(0, 0) = 0;
+      for (int a = 0; a < 3; ++a) flat.stream(layout.tangent(a))(1, 0) = 0;
+      for (int a = 0; a < 3; ++a) flat.stream(layout.tangent(a))(2, 0) = a == 1 ? 1.0 : 0.0;
+      compare(*jet, hand, layout, first, flat, rng, false);
+    }
+  }
 }
 
 }  // namespace
