@@ -56,7 +56,8 @@ class SdfSurface {
     const bool smooth = scalar_of(norm) > 1e-12;
     const double c = std::sqrt(0.5 * w_.normal);
     r[0] = std::sqrt(w_.sdf) * part(z[0], w_.absolute);
-    for (int a = 0; a < 3; ++a) r[1 + a] = c * ((smooth ? T(g[a] / norm) : T(0.0)) - data.normal[a]);
+    for (int a = 0; a < 3; ++a)
+      r[1 + a] = c * ((smooth ? T(g[a] / norm) : T(0.0)) - data.normal[a]);
     r[4] = std::sqrt(w_.eikonal) * part(T(norm - 1.0), w_.absolute);
   }
 

@@ -77,16 +77,19 @@ TEST(JetResidual, AddsTheClosedFormAdjointIntoTheStreamsItReads) {
   residual.backward(first, layout, out, r_bar, adjoint);
   autodiff::Streams<double> expected = before;
   for (Eigen::Index p = 0; p < n; ++p) {
-    const double a = out.stream(StreamLayout::value())(p, 1), b = out.stream(layout.tangent(1))(p, 0);
+    const double a = out.stream(StreamLayout::value())(p, 1);
+    const double b = out.stream(layout.tangent(1))(p, 0);
     EXPECT_EQ(r(p, 0), a * b + residual.functor().constants(first + p));
     EXPECT_EQ(r(p, 1), std::sin(a) * std::exp(b));
     expected.stream(StreamLayout::value())(p, 1) +=
         r_bar(p, 0) * b + r_bar(p, 1) * std::cos(a) * std::exp(b);
-    expected.stream(layout.tangent(1))(p, 0) += r_bar(p, 0) * a + r_bar(p, 1) * std::sin(a) * std::exp(b);
+    expected.stream(layout.tangent(1))(p, 0) +=
+        r_bar(p, 0) * a + r_bar(p, 1) * std::sin(a) * std::exp(b);
   }
   EXPECT_LT((adjoint.data - expected.data).cwiseAbs().maxCoeff(), 1e-14);
   // Entries it does not read are left exactly as they were.
-  EXPECT_EQ(adjoint.stream(StreamLayout::value()).col(0), before.stream(StreamLayout::value()).col(0));
+  EXPECT_EQ(adjoint.stream(StreamLayout::value()).col(0),
+            before.stream(StreamLayout::value()).col(0));
   EXPECT_EQ(adjoint.stream(layout.tangent(0)), before.stream(layout.tangent(0)));
   EXPECT_EQ(adjoint.stream(layout.tangent(1)).col(1), before.stream(layout.tangent(1)).col(1));
 }
@@ -145,7 +148,8 @@ void compare(const Residual& jet, const Residual& reference, const StreamLayout&
     plus.data.data()[i] += h;
     minus.data.data()[i] -= h;
     const double fd =
-        (pairing(jet, first, layout, plus, r_bar) - pairing(jet, first, layout, minus, r_bar)) / (2 * h);
+        (pairing(jet, first, layout, plus, r_bar) - pairing(jet, first, layout, minus, r_bar)) /
+        (2 * h);
     const double exact = adjoint.data.data()[i] - out.data.data()[i];
     worst = std::max(worst, std::abs(fd - exact) / (1 + std::abs(fd)));
   }
@@ -225,7 +229,8 @@ TEST(JetResidual, SdfEqualsTheHandWrittenResidual) {
   const StreamLayout layout(autodiff::StreamSpec::gradient(3));
   for (const bool absolute : {true, false}) {
     for (const bool surface : {true, false}) {
-      SCOPED_TRACE(std::string(surface ? "surface" : "interior") + (absolute ? ", siren" : ", squares"));
+      SCOPED_TRACE(std::string(surface ? "surface" : "interior") +
+                   (absolute ? ", siren" : ", squares"));
       SdfWeights weights;
       weights.absolute = absolute;
       weights.alpha = 3;  // so that exp(−α|u|/2) is not flat at random u
