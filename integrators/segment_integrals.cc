@@ -55,6 +55,9 @@ void AdaptiveQuadratureOptions::validate() const {
   if (!(tolerance > 0))
     throw std::invalid_argument("AdaptiveQuadratureOptions.tolerance = " + std::to_string(tolerance) +
                                 ": must be > 0");
+  if (!(epsilon > 0 && epsilon < 1))
+    throw std::invalid_argument("AdaptiveQuadratureOptions.epsilon = " + std::to_string(epsilon) +
+                                ": must be in (0, 1)");
   if (max_depth < 1 || max_depth > 60)
     throw std::invalid_argument("AdaptiveQuadratureOptions.max_depth = " + std::to_string(max_depth) +
                                 ": must be in [1, 60]");
@@ -103,7 +106,8 @@ AdaptiveQuadratureResult adaptive_gauss_kronrod(const PointFunction& f, const Ei
       const double kronrod = scale * rule.kronrod.dot(v), gauss = scale * rule.gauss.dot(v);
       const double estimate = std::abs(kronrod - gauss);
       const double allowed = options.tolerance * (piece.to - piece.from);
-      if (estimate <= allowed || piece.depth >= options.max_depth || !std::isfinite(estimate)) {
+      const double rounding = 50 * options.epsilon * std::abs(scale) * rule.kronrod.dot(v.cwiseAbs());
+      if (estimate <= allowed || estimate <= rounding || piece.depth >= options.max_depth || !std::isfinite(estimate)) {
         result.integrals(piece.segment) += kronrod;
         result.error_estimates(piece.segment) += estimate;
         if (!(estimate <= allowed)) ++result.unconverged;

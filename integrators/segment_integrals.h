@@ -38,6 +38,11 @@ struct AdaptiveQuadratureOptions {
   // Bisections of a segment at most; a piece this deep is accepted as it is (and counted in
   // `unconverged`). 1 … 60.
   int max_depth = 30;
+  // Relative rounding error of the integrand's values (the evaluating scalar's epsilon: a
+  // float field's values are good to about 1e-7). A piece whose estimate is within
+  // 50 · epsilon · ∫|f| over it is accepted: below that, |K15 − G7| measures rounding, not
+  // the rule's error, and bisecting further would never end.
+  double epsilon = 2.220446049250313e-16;
   // Called after every round with the result so far and the pieces still open (progress
   // lines for long integrations); may be empty.
   std::function<void(const struct AdaptiveQuadratureResult& so_far, long open_pieces)> on_round;
@@ -50,7 +55,7 @@ struct AdaptiveQuadratureResult {
   Eigen::VectorXd integrals;        // per segment
   Eigen::VectorXd error_estimates;  // Σ |K15 − G7| of the accepted pieces, per segment
   long evaluations = 0;             // integrand values computed, over all segments
-  long unconverged = 0;             // pieces accepted at max_depth above their tolerance
+  long unconverged = 0;             // pieces accepted above their tolerance (max_depth, rounding)
   int rounds = 0;                   // batches evaluated
 };
 

@@ -28,6 +28,8 @@ struct OutputContext {
   // Streams of the trained field at points (n × field_input_dim), in double, for outputs
   // that read derivatives (an integral field's fitted integrand).
   std::function<autodiff::Streams<double>(const autodiff::StreamLayout&, const Eigen::MatrixXd&)> streams;
+  // Relative rounding error of those values: the training scalar's epsilon.
+  double epsilon = 2.220446049250313e-16;
 };
 
 // What `nfield render` asks of a problem whose field renders images: the cameras of a

@@ -140,7 +140,8 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
                                 Eigen::MatrixXd n = field.values(x.cast<Scalar>()).template cast<double>();
                                 return ansatz ? ansatz->values(x, n) : n;
                               },
-                              setup.output.grid, with_ansatz(evaluator(field), ansatz)};
+                              setup.output.grid, with_ansatz(evaluator(field), ansatz),
+                              std::numeric_limits<Scalar>::epsilon()};
   setup.problem->watch_field(context.values);
   const auto started = std::chrono::steady_clock::now();
   bool finished;
@@ -358,12 +359,13 @@ void render_checkpoint(const std::filesystem::path& checkpoint, const RenderRequ
     const fields::Field<float> field = fields::load_field<float>(file);
     setup.problem->render_views(
         {out_dir, [&field](const Eigen::MatrixXd& x) { return field.values(x.cast<float>()).cast<double>().eval(); },
-         setup.output.grid, evaluator(field)},
+         setup.output.grid, evaluator(field), std::numeric_limits<float>::epsilon()},
         request);
   } else {
     const fields::Field<double> field = fields::load_field<double>(file);
     setup.problem->render_views(
-        {out_dir, [&field](const Eigen::MatrixXd& x) { return field.values(x); }, setup.output.grid, evaluator(field)},
+        {out_dir, [&field](const Eigen::MatrixXd& x) { return field.values(x); }, setup.output.grid, evaluator(field),
+         std::numeric_limits<double>::epsilon()},
         request);
   }
 }

@@ -293,6 +293,7 @@ class AutoInt1d final : public Problem {
     const double rms_error = (from_ends - reference).norm() / std::sqrt(static_cast<double>(m));
     integrators::AdaptiveQuadratureOptions options;
     options.tolerance = std::max(0.1 * rms_error, 1e-15 * reference.cwiseAbs().maxCoeff());
+    options.epsilon = context.epsilon;
     auto shown = std::chrono::steady_clock::now();
     options.on_round = [&shown, m](const integrators::AdaptiveQuadratureResult& so_far, long open) {
       if (std::chrono::steady_clock::now() - shown < std::chrono::seconds(3)) return;

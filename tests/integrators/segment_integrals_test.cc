@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 namespace nfield::integrators {
 namespace {
@@ -51,6 +52,29 @@ TEST(AdaptiveGaussKronrod, CountsPiecesLeftAtMaximumDepth) {
   EXPECT_EQ(result.rounds, 3);
 }
 
+TEST(AdaptiveGaussKronrod, StopsAtTheRoundingOfItsIntegrand) {
+  // cos(x) rounded to float: a tolerance of 1e-15 lies below what the values resolve. With
+  // the float epsilon the pieces stop where |K15 − G7| is rounding, within a few rounds and
+  // still accurate to float precision; with double's they bisect to max_depth.
+  const auto f = [](const Eigen::MatrixXd& x) -> Eigen::VectorXd {
+    return x.col(0).array().cos().cast<float>().cast<double>();
+  };
+  Eigen::MatrixXd a(1, 1), b(1, 1);
+  a << 0;
+  b << 100;
+  AdaptiveQuadratureOptions options;
+  options.tolerance = 1e-15;
+  options.max_depth = 16;
+  options.epsilon = std::numeric_limits<float>::epsilon();
+  const auto rounded = adaptive_gauss_kronrod(f, a, b, options);
+  EXPECT_LT(rounded.rounds, 10);
+  EXPECT_NEAR(rounded.integrals(0), std::sin(100.0), 1e-5);
+  options.epsilon = std::numeric_limits<double>::epsilon();
+  const auto bisected = adaptive_gauss_kronrod(f, a, b, options);
+  EXPECT_EQ(bisected.rounds, 17);
+  EXPECT_GT(bisected.evaluations, 100 * rounded.evaluations);
+}
+
 TEST(AdaptiveGaussKronrod, RejectsBadOptionsNamingTheField) {
   Eigen::MatrixXd a = Eigen::MatrixXd::Zero(1, 1), b = Eigen::MatrixXd::Ones(1, 1);
   const auto f = [](const Eigen::MatrixXd& x) -> Eigen::VectorXd { return x.col(0); };
@@ -61,6 +85,7 @@ TEST(AdaptiveGaussKronrod, RejectsBadOptionsNamingTheField) {
     EXPECT_NE(std::string(e.what()).find("tolerance"), std::string::npos) << e.what();
   }
   EXPECT_THROW(adaptive_gauss_kronrod(f, a, b, {.max_depth = 0}), std::invalid_argument);
+  EXPECT_THROW(adaptive_gauss_kronrod(f, a, b, {.epsilon = 0}), std::invalid_argument);
 }
 
 TEST(AntiderivativeDifferences, GiveTheIntegralOfTheDirectionalDerivative) {
