@@ -64,6 +64,14 @@ class EikonalBase {
     for (int a = 0; a < D; ++a) g[a] = tau * data.grad_t0[a] + data.t0 * z[1 + a];
   }
 
+  // ∇u · n with the point's normal n (its per-point constants).
+  template <typename T>
+  static T normal_component(const T* g, const PointData& data) {
+    T s = data.per_point[0] * g[0];
+    for (int a = 1; a < D; ++a) s += data.per_point[a] * g[a];
+    return s;
+  }
+
   // u: the value (plain) or T₀ (1 + τ) (factored).
   template <typename T>
   T value(const T* z, const PointData& data) const {
@@ -145,9 +153,7 @@ class EikonalOutflow : public EikonalBase<D> {
   void operator()(const T* z, const PointData& data, T* r) const {
     T g[D];
     this->gradient(z, data, g);
-    T normal_slope = data.per_point[0] * g[0];
-    for (int a = 1; a < D; ++a) normal_slope += data.per_point[a] * g[a];
-    r[0] = min_zero(normal_slope);
+    r[0] = min_zero(Base::normal_component(g, data));
     r[1] = min_zero(this->value(z, data)) / this->setup_.length;
   }
 };
@@ -171,8 +177,7 @@ class EikonalInterface : public EikonalBase<D> {
     T g[D];
     this->gradient(z, data, g);
     const double* normal = data.per_point;
-    T s = normal[0] * g[0];
-    for (int a = 1; a < D; ++a) s += normal[a] * g[a];
+    const T s = Base::normal_component(g, data);
     if (!(scalar_of(s) < 0)) {
       r[0] = T(0.0);
       return;
