@@ -17,6 +17,7 @@ struct Run {
   std::string name;
   int sections = 0;          // 0: a NeRF
   int evaluations_per_ray = 0;
+  bool sampler = false;      // sections placed by the sampling network
   solvers::RunSetup setup;
   nlohmann::json metrics;
 };
@@ -45,21 +46,30 @@ int run_autoint_bench(const AutointBenchOptions& options) {
   };
   // Every config is read and checked before any training, so a bad one fails at once.
   std::vector<Run> runs;
-  runs.push_back({"nerf_quadrature", 0, options.nerf_samples,
+  runs.push_back({"nerf_quadrature", 0, options.nerf_samples, false,
                   solvers::load_run(options.nerf_config, with({"render.samples=" + std::to_string(options.nerf_samples)}),
                                     options.out / "nerf_quadrature"),
                   {}});
   if (options.with_grid)
-    runs.push_back({"nerf_grid", 0, 0, solvers::load_run(options.grid_config, with({}), options.out / "nerf_grid"), {}});
-  for (int k : options.sections) {
-    const long per_section = std::max(1L, std::lround(static_cast<double>(options.samples_per_ray) / k));
-    runs.push_back({"autoint_" + std::to_string(k), k, k + 1,
-                    solvers::load_run(options.autoint_config,
-                                      with({"render.sections=" + std::to_string(k),
-                                            "render.samples_per_section=" + std::to_string(per_section)}),
-                                      options.out / ("autoint_" + std::to_string(k))),
-                    {}});
-  }
+    runs.push_back({"nerf_grid", 0, 0, false, solvers::load_run(options.grid_config, with({}), options.out / "nerf_grid"), {}});
+  std::vector<bool> samplers;
+  if (options.sampler != "on") samplers.push_back(false);
+  if (options.sampler != "off") samplers.push_back(true);
+  for (bool sampler : samplers)
+    for (int k : options.sections) {
+      const long per_section = std::max(1L, std::lround(static_cast<double>(options.samples_per_ray) / k));
+      std::vector<std::string> set{"render.sections=" + std::to_string(k),
+                                   "render.samples_per_section=" + std::to_string(per_section)};
+      // The config's own sampler section if it has one, else the defaults; or none.
+      const std::string name = "autoint_" + std::to_string(k) + (sampler ? "_sampler" : "");
+      solvers::RunSetup setup = solvers::load_run(options.autoint_config, with(set), options.out / name);
+      const io::ConfigNode render = setup.root.child_or_empty("render");
+      const bool configured =
+          render.has("sampler") && !(render.yaml()["sampler"].IsScalar() && !render.get<bool>("sampler"));
+      if (sampler != configured) set.push_back(std::string("render.sampler=") + (sampler ? "true" : "false"));
+      if (sampler != configured) setup = solvers::load_run(options.autoint_config, with(set), options.out / name);
+      runs.push_back({name, k, k + 1, sampler, std::move(setup), {}});
+    }
   for (size_t r = 0; r < runs.size(); ++r) {
     std::printf("== %s (%zu/%zu, %.0f s of training): %s\n", runs[r].name.c_str(), r + 1, runs.size(),
                 options.seconds, runs[r].setup.config_path.string().c_str());
@@ -78,12 +88,13 @@ int run_autoint_bench(const AutointBenchOptions& options) {
   struct Row {
     std::string run;
     int sections, evaluations;
+    bool sampler;
     double steps, train_s, psnr, ssim, ms;
   };
   std::vector<Row> rows;
   for (const Run& run : runs) {
     const nlohmann::json& m = run.metrics;
-    Row row{run.name, run.sections, run.evaluations_per_ray, m["steps"].get<double>(), m["wall_s"].get<double>(),
+    Row row{run.name, run.sections, run.evaluations_per_ray, run.sampler, m["steps"].get<double>(), m["wall_s"].get<double>(),
             m["psnr_mean"].get<double>(), m["ssim_mean"].get<double>(), m["render_ms_mean"].get<double>()};
     rows.push_back(row);
     if (run.name == "nerf_grid" && m.contains("render_ms_dense_mean")) {
@@ -98,7 +109,7 @@ int run_autoint_bench(const AutointBenchOptions& options) {
 
   std::printf("\nsame training time (%.0f s) per run; reference: NeRF quadrature, %d samples a ray\n",
               options.seconds, options.nerf_samples);
-  std::printf("%-16s %5s %9s %7s %10s %8s %10s %9s %9s  %s\n", "run", "K", "evals/ray", "steps", "test PSNR",
+  std::printf("%-20s %5s %9s %7s %10s %8s %10s %9s %9s  %s\n", "run", "K", "evals/ray", "steps", "test PSNR",
               "SSIM", "ms/frame", "speed-up", "dB lost", "target (speed-up >=, dB lost <=)");
   nlohmann::ordered_json all = nlohmann::ordered_json::array();
   std::vector<std::string> lines;
@@ -108,11 +119,11 @@ int run_autoint_bench(const AutointBenchOptions& options) {
     const bool has_target = std::isfinite(target_speedup);
     const bool met = has_target && speedup >= target_speedup && loss <= target_loss;
     char evaluations[16] = "march";
-    if (row.evaluations > 0) std::snprintf(evaluations, sizeof evaluations, "%d", row.evaluations);
+    if (row.evaluations > 0) std::snprintf(evaluations, sizeof evaluations, row.sampler ? "%d+S" : "%d", row.evaluations);
     char goal[64] = "";
     if (has_target)
       std::snprintf(goal, sizeof goal, "%.0fx, %.1f dB: %s", target_speedup, target_loss, met ? "met" : "not met");
-    std::printf("%-16s %5s %9s %7.0f %10.2f %8.4f %10.1f %8.2fx %9.2f  %s\n", row.run.c_str(),
+    std::printf("%-20s %5s %9s %7.0f %10.2f %8.4f %10.1f %8.2fx %9.2f  %s\n", row.run.c_str(),
                 row.sections > 0 ? std::to_string(row.sections).c_str() : "-", evaluations, row.steps, row.psnr,
                 row.ssim, row.ms, speedup, loss, goal);
     nlohmann::ordered_json line;
@@ -120,6 +131,7 @@ int run_autoint_bench(const AutointBenchOptions& options) {
     line["run"] = row.run;
     line["sections"] = row.sections;
     line["evaluations_per_ray"] = row.evaluations;
+    line["sampling_network"] = row.sampler;
     line["steps"] = row.steps;
     line["train_s"] = row.train_s;
     line["psnr_mean"] = number(row.psnr);

@@ -9,14 +9,18 @@
 //   nerf_grid         optionally NeRF marched through its occupancy grid
 //                     (configs/nerf_bunny.yaml), with and without the grid at render time
 //   autoint_K         configs/autoint_bunny.yaml with render.sections = K, for each K, and
-//                     render.samples_per_section = samples_per_ray / K (at least 1)
+//                     render.samples_per_section = samples_per_ray / K (at least 1), equal
+//                     sections
+//   autoint_K_sampler the same with the sampling network placing the sections
+//                     (render.sampler: the config's section, or the defaults); a ray then
+//                     costs K + 1 evaluations of the field and one of the network ("K+1+S")
 //
 // and renders each one's test views (`nfield run`'s outputs under OUT/RUN). Prints a table:
 // field evaluations per ray, training steps, mean test PSNR, ms to render a frame, the
 // speed-up of rendering over the reference, the PSNR lost against it, and the targets
 // for K = 8, 16, 32 (speed-up at least, dB lost at most). Writes the rows to OUT/autoint_bench.json
 // and prints each as a JSON line:
-//   {"bench":"autoint","run", "sections", "evaluations_per_ray", "steps", "train_s",
+//   {"bench":"autoint","run", "sections", "evaluations_per_ray", "sampling_network", "steps", "train_s",
 //    "psnr_mean", "ssim_mean", "render_ms", "speedup", "psnr_loss_db", "target_speedup",
 //    "target_psnr_loss_db", "met"}
 #pragma once
@@ -38,6 +42,7 @@ struct AutointBenchOptions {
   // (render.samples_per_section), so that every K trains at about the same cost a step.
   int samples_per_ray = 64;
   bool with_grid = true;    // also train and time the occupancy-grid NeRF
+  std::string sampler = "both";  // AutoInt runs with equal sections (off), sampled (on), or both
   std::filesystem::path out = "out/autoint_bench";
   std::vector<std::string> overrides;  // --set, applied to every run's config
 };

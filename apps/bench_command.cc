@@ -270,6 +270,10 @@ void add_bench_command(CLI::App& app) {
   bench->add_option("--grid-config", autoint->grid_config, "--autoint: the NeRF config with an occupancy grid")
       ->check(CLI::ExistingFile)
       ->capture_default_str();
+  bench->add_option("--sampler", autoint->sampler,
+                    "--autoint: AutoInt runs with equal sections (off), with the sampling network (on), or both")
+      ->check(CLI::IsMember({"both", "off", "on"}))
+      ->capture_default_str();
   auto no_grid = std::make_shared<bool>(false);
   bench->add_flag("--no-grid", *no_grid, "--autoint: leave out the occupancy-grid NeRF");
   auto autoint_out = std::make_shared<std::filesystem::path>(autoint->out);

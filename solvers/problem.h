@@ -17,17 +17,24 @@
 #include "io/config.h"
 #include "solvers/residual.h"
 
+namespace nfield::io {
+class H5Writer;
+class H5Reader;
+}  // namespace nfield::io
+
 namespace nfield::solvers {
 
 // What a problem writes besides the common outputs (grid, metrics).
 struct OutputContext {
+  using FieldStreams =
+      std::function<autodiff::Streams<double>(const autodiff::StreamLayout&, const Eigen::MatrixXd&)>;
   std::filesystem::path dir;
   // Values of the trained field at points (n × output_dim), in double.
   std::function<Eigen::MatrixXd(const Eigen::MatrixXd&)> values;
   std::vector<int> grid;  // output.grid
   // Streams of the trained field at points (n × field_input_dim), in double, for outputs
   // that read derivatives (an integral field's fitted integrand).
-  std::function<autodiff::Streams<double>(const autodiff::StreamLayout&, const Eigen::MatrixXd&)> streams;
+  FieldStreams streams;
   // Relative rounding error of those values: the training scalar's epsilon.
   double epsilon = 2.220446049250313e-16;
 };
@@ -72,10 +79,18 @@ class Problem {
   virtual std::optional<double> reported_error(const OutputContext&) const { return std::nullopt; }
 
   // The field being trained, for problems that sample where it is (a radiance field's
-  // occupancy grid): values (n × output_dim) at n × field_input_dim() points. The program
-  // calls this once before training; `values` stays valid until training ends.
+  // occupancy grid, AutoInt's sampling network): values (n × output_dim) at n ×
+  // field_input_dim() points, and its streams there. The program calls this once before
+  // training; both stay valid until training ends.
   using FieldValues = std::function<Eigen::MatrixXd(const Eigen::MatrixXd&)>;
-  virtual void watch_field(FieldValues values) { (void)values; }
+  virtual void watch_field(FieldValues values, OutputContext::FieldStreams streams) {
+    (void)values;
+    (void)streams;
+  }
+  // What a problem learns beside the field (AutoInt's sampling network), kept in checkpoints:
+  // saved with every checkpoint, loaded on resume and by `nfield render`. Default: nothing.
+  virtual void save_state(io::H5Writer& file) const { (void)file; }
+  virtual void load_state(const io::H5Reader& file) { (void)file; }
 
   // Figures for the progress line (a radiance field's PSNR on a held-out view, rays per
   // second), computed at most every few seconds by the program; `progress` is the step just

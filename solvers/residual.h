@@ -20,18 +20,9 @@ namespace nfield::solvers {
 using autodiff::StreamLayout;
 using autodiff::Streams;
 
-class Residual {
- public:
-  virtual ~Residual() = default;
-  virtual int components() const = 0;
-  // r (out.points × components) for points [first, first + out.points) of the point set
-  // this residual was built for.
-  virtual void evaluate(Eigen::Index first, const StreamLayout& layout, const Streams<double>& out,
-                        Eigen::MatrixXd& r) const = 0;
-  // adjoint += ∂(Σ r̄ ⊙ r)/∂out.
-  virtual void backward(Eigen::Index first, const StreamLayout& layout, const Streams<double>& out,
-                        const Eigen::MatrixXd& r_bar, Streams<double>& adjoint) const = 0;
-};
+// The one residual interface (autodiff/stream_residual.h), in double: the trainer's
+// adapters below scale it into a loss or a least-squares residual in the training precision.
+using Residual = autodiff::StreamResidual<double>;
 
 // r_c = Σₖ aₖ(x) · out[streamₖ][channelₖ] − f_c(x): every linear PDE and condition.
 class LinearResidual final : public Residual {

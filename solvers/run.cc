@@ -98,11 +98,12 @@ StreamEvaluator evaluator(const fields::Field<Scalar>& field) {
 
 template <typename Scalar>
 void write_checkpoint(const std::filesystem::path& path, const fields::Field<Scalar>& field,
-                      const Trainer<Scalar>& trainer, const std::string& config_text,
-                      const std::filesystem::path& config_dir) {
+                      const Trainer<Scalar>& trainer, const Problem& problem,
+                      const std::string& config_text, const std::filesystem::path& config_dir) {
   io::H5Writer file(path);
   fields::save_field(file, field);
   trainer.save_state(file);
+  problem.save_state(file);
   file.write_attribute("/", "config", config_text);
   // Relative data paths in the config (point clouds, images) resolve against this folder.
   file.write_attribute("/", "config_dir", config_dir.string());
@@ -128,6 +129,7 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
                                std::to_string(field.parameter_count()));
     field.parameters() = saved.parameters();
     trainer.load_state(file);
+    setup.problem->load_state(file);
     std::printf("resuming from %s at step %ld\n", resume.string().c_str(), trainer.step());
   }
   std::filesystem::create_directories(dir);
@@ -142,7 +144,7 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
                               },
                               setup.output.grid, with_ansatz(evaluator(field), ansatz),
                               std::numeric_limits<Scalar>::epsilon()};
-  setup.problem->watch_field(context.values);
+  setup.problem->watch_field(context.values, context.streams);
   const auto started = std::chrono::steady_clock::now();
   bool finished;
   {
@@ -173,12 +175,14 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
                  ? grid_error(*setup.problem, with_ansatz(evaluator(field), ansatz), setup.output).rel_l2
                  : std::numeric_limits<double>::quiet_NaN();
     };
-    callbacks.checkpoint = [&] { write_checkpoint(dir / "checkpoint.h5", field, trainer, config_text, config_dir); };
+    callbacks.checkpoint = [&] {
+      write_checkpoint(dir / "checkpoint.h5", field, trainer, *setup.problem, config_text, config_dir);
+    };
     finished = trainer.run(callbacks);
   }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   if (!finished) std::printf("\ninterrupted at step %ld: writing the checkpoint and outputs\n", trainer.step());
-  write_checkpoint(dir / "checkpoint.h5", field, trainer, config_text, config_dir);
+  write_checkpoint(dir / "checkpoint.h5", field, trainer, *setup.problem, config_text, config_dir);
 
   const GridMetrics grid =
       setup.problem->writes_grid_outputs()
@@ -354,6 +358,7 @@ void render_checkpoint(const std::filesystem::path& checkpoint, const RenderRequ
                        const std::filesystem::path& out_dir) {
   const io::H5Reader file(checkpoint);
   RunSetup setup = checkpoint_run(file, out_dir);
+  setup.problem->load_state(file);
   // In the precision it was trained in (a float field renders about twice as fast).
   if (setup.training.precision == "float") {
     const fields::Field<float> field = fields::load_field<float>(file);

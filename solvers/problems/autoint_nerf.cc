@@ -12,6 +12,12 @@
 //     samples_per_section: 4    # m stratified samples per section in training
 //     density: softplus         # softplus | trunc_exp, on a section's mean raw density
 //     density_scale: 10         # s̄_σ = this × the mean rate of Φ_σ (default 1)
+//     sampler:                  # optional: sections placed by a sampling network
+//       hidden: [64, 64]        #   (solvers/problems/section_sampler.h); `true`: these
+//       frequencies: 4          #   defaults; absent or `false`: equal sections
+//       lr: 1.0e-3
+//       min_share: 0.25         #   each section ≥ min_share/K of the ray
+//       every: 1                #   steps between the network's updates
 //   field: {type: nerf, activation: tanh, encoding: {type: positional, normalize: true}}
 //   training:
 //     batch: {rays: 1024}
@@ -35,9 +41,17 @@
 // sample's tangent stream through the activations' derivatives and 1/m. The loss is the mean
 // over rays of ‖C − C_pixel‖², one group of K·m samples per ray.
 //
-// Rendering. s̄ᵢ = (Φ(o + tᵢ₊₁d, d) − Φ(o + tᵢd, d))/Δ exactly, from the values at the K + 1
+// Rendering. s̄ᵢ = (Φ(o + tᵢ₊₁d, d) − Φ(o + tᵢd, d))/Δᵢ exactly, from the values at the K + 1
 // section ends (no tangent streams), composited the same way: a ray costs K + 1 field
 // evaluations.
+//
+// Sampling network (`render.sampler`). The sections are those a small network places per
+// ray (section_sampler.h) instead of equal ones, in training and rendering alike. Before
+// each batch's step of the field, the network takes one Adam step on the rendering loss of
+// that batch's rays at its own sections, with Φ fixed; the field's step then trains at the
+// stratified samples of the sections it now places. Its weights and Adam state are saved in
+// the checkpoint (group `sampler`), so resume and `nfield render` use the same sections. A
+// ray then costs one evaluation of the sampling network besides the K + 1 of Φ.
 //
 // Encodings: the positional encoding's octave l should be scaled by 2⁻ˡ
 // (`encoding.normalize: true`, as the paper's normalize_pe), so that ∂Φ/∂t, which the
@@ -59,6 +73,7 @@
 #include "integrators/volume_rendering.h"
 #include "solvers/problems/problems.h"
 #include "solvers/problems/radiance_scene.h"
+#include "solvers/problems/section_sampler.h"
 
 namespace nfield::solvers {
 namespace {
@@ -159,7 +174,24 @@ class AutointNerf final : public Problem {
     density_.truncated_exp = render.get_choice("density", {"softplus", "trunc_exp"}, "softplus") == "trunc_exp";
     density_scale_ = render.get_or("density_scale", density_scale_);
     render.require("density_scale", density_scale_ > 0 && std::isfinite(density_scale_), "expected a number > 0");
+    if (render.has("sampler")) {
+      const YAML::Node node = render.yaml()["sampler"];
+      if (node.IsMap())
+        sampler_ = std::make_unique<SectionSampler>(sections_, SectionSamplerOptions::from_config(render.child("sampler")));
+      else if (node.IsScalar() && render.get<bool>("sampler"))
+        sampler_ = std::make_unique<SectionSampler>(sections_, SectionSamplerOptions{});
+      else
+        render.require("sampler", node.IsScalar(), "expected true, false or a mapping of the network's options");
+    }
     render.reject_unknown_keys();
+  }
+
+  void watch_field(FieldValues, OutputContext::FieldStreams streams) override { field_ = std::move(streams); }
+  void save_state(io::H5Writer& file) const override {
+    if (sampler_) sampler_->save(file, "sampler");
+  }
+  void load_state(const io::H5Reader& file) override {
+    if (sampler_) sampler_->load(file, "sampler");
   }
 
   const Domain& domain() const override { return scene_.domain(); }
@@ -175,6 +207,10 @@ class AutointNerf final : public Problem {
                                                                double steps_per_second) const override {
     std::vector<std::pair<std::string, double>> figures{
         {"rays/s", steps_per_second * static_cast<double>(rays_per_step_)}};
+    if (sampler_) {
+      figures.emplace_back("sampler_loss", last_update_.loss);
+      figures.emplace_back("max_section", last_update_.max_section_share);
+    }
     for (auto& figure : scene_.progress_psnr(renderer(context.values))) figures.push_back(std::move(figure));
     return figures;
   }
@@ -206,6 +242,12 @@ class AutointNerf final : public Problem {
                      std::vector<std::pair<std::string, double>>& metrics) const override {
     scene_.write_test_views(context, renderer(context.values), metrics);
     metrics.emplace_back("field_evaluations_per_ray", sections_ + 1);
+    metrics.emplace_back("sampling_network", sampler_ ? 1 : 0);
+    if (sampler_) {
+      metrics.emplace_back("sampler_parameters", static_cast<double>(sampler_->parameter_count()));
+      metrics.emplace_back("sampler_loss", last_update_.loss);
+      metrics.emplace_back("sampler_max_section_share", last_update_.max_section_share);
+    }
   }
 
  private:
@@ -214,12 +256,21 @@ class AutointNerf final : public Problem {
     PixelTargets drawn = scene_.draw_pixels(rays, engine);
     const integrators::Rays<double>& pixel_rays = drawn.pixels.rays;
     auto batch = std::make_shared<SectionBatch>();
-    batch->sections = integrators::equal_sections(pixel_rays, sections_);
     batch->samples_per_section = samples_per_section_;
-    // K·m equal bins, one jittered sample each: bins [i·m, (i+1)·m) are section i's.
-    const RaySamples<double> samples =
-        integrators::stratified_samples(pixel_rays, {sections_ * samples_per_section_, true}, engine);
-    scene_.draw_targets(drawn, engine);
+    RaySamples<double> samples;
+    if (sampler_) {
+      scene_.draw_targets(drawn, engine);
+      if (field_ && draws_ % sampler_->options().every == 0)
+        last_update_ = sampler_->update(pixel_rays, drawn.target, drawn.background, field_, density_, density_scale_);
+      ++draws_;
+      batch->sections = sampler_->sections(pixel_rays);
+      samples = stratified_in_sections(batch->sections, samples_per_section_, engine);
+    } else {
+      batch->sections = integrators::equal_sections(pixel_rays, sections_);
+      // K·m equal bins, one jittered sample each: bins [i·m, (i+1)·m) are section i's.
+      samples = integrators::stratified_samples(pixel_rays, {sections_ * samples_per_section_, true}, engine);
+      scene_.draw_targets(drawn, engine);
+    }
     batch->target = std::move(drawn.target);
     batch->background = std::move(drawn.background);
     rays_per_step_ = rays;
@@ -236,20 +287,41 @@ class AutointNerf final : public Problem {
     return points;
   }
 
+  // m samples per section, one in each of its m equal parts at a uniform place.
+  static RaySamples<double> stratified_in_sections(const RaySamples<double>& sections, int m,
+                                                   std::mt19937_64& engine) {
+    RaySamples<double> out;
+    out.offsets.resize(sections.offsets.size());
+    for (size_t r = 0; r < sections.offsets.size(); ++r) out.offsets[r] = sections.offsets[r] * m;
+    out.t.resize(sections.size() * m);
+    out.delta.resize(sections.size() * m);
+    std::uniform_real_distribution<double> uniform(0.0, 1.0);
+    for (Eigen::Index i = 0; i < sections.size(); ++i) {
+      const double part = sections.delta(i) / m, begin = sections.t(i) - 0.5 * sections.delta(i);
+      for (int j = 0; j < m; ++j) {
+        out.t(i * m + j) = begin + (j + uniform(engine)) * part;
+        out.delta(i * m + j) = part;
+      }
+    }
+    return out;
+  }
+
   // Section means from Φ at the K + 1 section ends of every ray, composited.
   RenderRays renderer(const FieldValues& values) const {
     return [this, values](const integrators::Rays<double>& rays, const Eigen::Vector3d& background) {
-      const RaySamples<double> sections = integrators::equal_sections(rays, sections_);
+      const RaySamples<double> sections =
+          sampler_ ? sampler_->sections(rays) : integrators::equal_sections(rays, sections_);
       const Eigen::Index hit = static_cast<Eigen::Index>(sections.size() / sections_);
       const Eigen::Index ends = sections_ + 1;
       Eigen::MatrixXd x(hit * ends, 6);
       Eigen::Index row = 0;
       for (Eigen::Index r = 0; r < rays.size(); ++r) {
         if (sections.count(r) == 0) continue;
-        const double near = rays.near(r), length = sections.delta(sections.begin(r));
+        double t = rays.near(r);
         for (Eigen::Index e = 0; e < ends; ++e, ++row) {
-          x.row(row).head(3) = rays.origins.row(r) + (near + e * length) * rays.directions.row(r);
+          x.row(row).head(3) = rays.origins.row(r) + t * rays.directions.row(r);
           x.row(row).tail(3) = rays.directions.row(r);
+          t = e + 1 < sections_ ? t + sections.delta(sections.begin(r) + e) : rays.far(r);
         }
       }
       const Eigen::MatrixXd phi = values(x);
@@ -268,6 +340,12 @@ class AutointNerf final : public Problem {
   int samples_per_section_ = 4;
   DensityActivation density_;
   double density_scale_ = 1;
+  // The sampling network and the field it is trained against; mutable because drawing a
+  // batch (a const member the loss term calls) is where it learns, as NeRF's occupancy grid.
+  mutable std::unique_ptr<SectionSampler> sampler_;
+  OutputContext::FieldStreams field_;
+  mutable SamplerUpdate last_update_;
+  mutable long draws_ = 0;
   mutable Eigen::Index rays_per_step_ = 0;  // of the last batch
 };
 

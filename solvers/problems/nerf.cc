@@ -179,7 +179,7 @@ class Nerf final : public Problem {
   std::vector<std::string> output_names() const override { return {"density", "red", "green", "blue"}; }
   int residual_term() const override { return -1; }
   bool writes_grid_outputs() const override { return false; }
-  void watch_field(FieldValues values) override { field_ = std::move(values); }
+  void watch_field(FieldValues values, OutputContext::FieldStreams) override { field_ = std::move(values); }
 
   std::vector<std::pair<std::string, double>> progress_metrics(
       const OutputContext& context, double steps_per_second) const override {

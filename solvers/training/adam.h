@@ -34,6 +34,8 @@ class Adam {
   const AdamOptions& options() const { return options_; }
   autodiff::Vector<Scalar>& first_moment() { return m_; }
   autodiff::Vector<Scalar>& second_moment() { return v_; }
+  const autodiff::Vector<Scalar>& first_moment() const { return m_; }
+  const autodiff::Vector<Scalar>& second_moment() const { return v_; }
   std::int64_t steps() const { return t_; }
   void set_steps(std::int64_t t) { t_ = t; }
 

@@ -470,11 +470,20 @@ TEST(AutointBenchTest, PrintsTheTableAndWritesItsRows) {
       EXPECT_TRUE(row.contains(key)) << key;
     if (row["run"] == "nerf_quadrature") EXPECT_EQ(row["speedup"].get<double>(), 1.0);
   }
-  EXPECT_EQ(runs, (std::vector<std::string>{"nerf_quadrature", "autoint_2", "autoint_3"}));
+  EXPECT_EQ(runs, (std::vector<std::string>{"nerf_quadrature", "autoint_2", "autoint_3", "autoint_2_sampler",
+                                            "autoint_3_sampler"}));
+  EXPECT_NE(o.out.find("4+S"), std::string::npos) << o.out;
   const nlohmann::json written = read_json(dir / "out" / "autoint_bench.json");
-  ASSERT_EQ(written.size(), 3u);
+  ASSERT_EQ(written.size(), 5u);
   EXPECT_EQ(written[2]["evaluations_per_ray"].get<int>(), 4);
+  EXPECT_FALSE(written[2]["sampling_network"].get<bool>());
+  EXPECT_TRUE(written[4]["sampling_network"].get<bool>());
   EXPECT_TRUE(std::filesystem::exists(dir / "out" / "autoint_3" / "test_views" / "test_000_render.png"));
+  // The sampled runs' configs name the network; the equal-section runs' do not.
+  const nlohmann::json sampled = read_json(dir / "out" / "autoint_3_sampler" / "metrics.json");
+  const nlohmann::json equal = read_json(dir / "out" / "autoint_3" / "metrics.json");
+  EXPECT_EQ(sampled["sampling_network"].get<double>(), 1.0);
+  EXPECT_EQ(equal["sampling_network"].get<double>(), 0.0);
 }
 
 INSTANTIATE_TEST_SUITE_P(Precisions, OutputsTest, ::testing::Values("double", "float"));

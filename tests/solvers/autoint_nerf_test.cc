@@ -5,7 +5,9 @@
 // stream equals central differences of Φ along the ray. The section residual's adjoint
 // against central differences, a drawn batch's per-point tangents, config errors located,
 // and a short training run whose loss falls (through the trainer's per-point tangents) and
-// that writes and renders test views.
+// that writes and renders test views. The sampling network: its sections tile each ray, its
+// gradient against central differences, it learns to enclose a thin slab of a known
+// integral field, and it is kept in checkpoints.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -16,7 +18,10 @@
 
 #include "autodiff/sequential.h"
 #include "fields/field.h"
+#include "integrators/volume_rendering.h"
+#include "io/hdf5_file.h"
 #include "io/png_image.h"
+#include "solvers/problems/section_sampler.h"
 #include "solvers/run.h"
 #include "tests/testing/config_errors.h"
 #include "tests/testing/ray_residual_checks.h"
@@ -162,6 +167,220 @@ TEST(AutointNerf, ConfigErrorsAreLocated) {
   check(autoint_config("{sections: 8, samples: 3}"), {5, 23, "render", "unknown key 'samples'"});
   check(autoint_config("{samples_per_section: 2.5}"), {5, 31, "render.samples_per_section", ""});
   check(autoint_config("{density: relu}"), {5, 19, "render.density", "softplus"});
+  check(autoint_config("{sampler: {min_share: 1}}"), {5, 31, "render.sampler.min_share", "[0, 1)"});
+  check(autoint_config("{sampler: {hidden: [0]}}"), {5, 28, "render.sampler.hidden", ">= 1"});
+  check(autoint_config("{sampler: {layers: 2}}"), {5, 20, "render.sampler", "unknown key 'layers'"});
+  check(autoint_config("{sampler: [64]}"), {5, 19, "render.sampler", "true, false or a mapping"});
+  check(autoint_config("{sampler: yes please}"), {5, 19, "render.sampler", ""});
+}
+
+// Rays through the box [−0.6, 0.6]³ from a sphere of radius 2, a few of them missing it.
+integrators::Rays<double> random_rays(Eigen::Index n, std::mt19937_64& engine) {
+  std::normal_distribution<double> normal;
+  std::uniform_real_distribution<double> uniform(-0.5, 0.5);
+  integrators::Rays<double> rays;
+  rays.origins.resize(n, 3);
+  rays.directions.resize(n, 3);
+  rays.depth_scale.setOnes(n);
+  rays.near.resize(n);
+  rays.far.resize(n);
+  for (Eigen::Index r = 0; r < n; ++r) {
+    const Eigen::Vector3d o = Eigen::Vector3d(normal(engine), normal(engine), normal(engine)).normalized() * 2;
+    const Eigen::Vector3d aim(uniform(engine), uniform(engine), uniform(engine));
+    const Eigen::Vector3d d = (aim - o).normalized();
+    rays.origins.row(r) = o.transpose();
+    rays.directions.row(r) = d.transpose();
+    rays.near(r) = 1.2;
+    rays.far(r) = r % 7 == 3 ? 1.0 : 2.8;  // every 7th ray: an empty interval
+  }
+  return rays;
+}
+
+OutputContext::FieldStreams streams_of(const fields::Field<double>& field) {
+  return [&field](const autodiff::StreamLayout& layout, const Eigen::MatrixXd& x) {
+    autodiff::Streams<double> out;
+    field.evaluate(layout, x, out);
+    return out;
+  };
+}
+
+TEST(SectionSampler, SectionsTileEachRayWithTheMinimumShare) {
+  SectionSamplerOptions options;
+  options.min_share = 0.4;
+  SectionSampler sampler(8, options);
+  std::mt19937_64 engine(1);
+  // An untrained S gives equal sections (its output layer starts at zero): other weights.
+  EXPECT_TRUE(sampler.sections(random_rays(5, engine)).delta.isApproxToConstant(1.6 / 8, 1e-12));
+  sampler.parameters().setRandom();
+  const integrators::Rays<double> rays = random_rays(30, engine);
+  const Eigen::MatrixXd t = sampler.boundaries(rays);
+  const integrators::RaySamples<double> sections = sampler.sections(rays);
+  ASSERT_EQ(sections.rays(), 30);
+  Eigen::Index k = 0;
+  double most_unequal = 0;
+  for (Eigen::Index r = 0; r < rays.size(); ++r) {
+    if (r % 7 == 3) {
+      EXPECT_EQ(sections.count(r), 0) << r;
+      continue;
+    }
+    ASSERT_EQ(sections.count(r), 8) << r;
+    EXPECT_EQ(t(k, 0), rays.near(r));
+    EXPECT_EQ(t(k, 8), rays.far(r));
+    const double length = rays.far(r) - rays.near(r);
+    for (int i = 0; i < 8; ++i) {
+      const double delta = t(k, i + 1) - t(k, i);
+      EXPECT_GE(delta, (1 - 1e-12) * 0.4 / 8 * length) << r << " " << i;
+      EXPECT_NEAR(sections.delta(sections.begin(r) + i), delta, 1e-15);
+      EXPECT_NEAR(sections.t(sections.begin(r) + i), 0.5 * (t(k, i) + t(k, i + 1)), 1e-15);
+      most_unequal = std::max(most_unequal, delta / (length / 8));
+    }
+    ++k;
+  }
+  EXPECT_EQ(k, t.rows());
+  EXPECT_GT(most_unequal, 1.1);  // the network does place them
+}
+
+TEST(SectionSampler, GradientMatchesCentralDifferences) {
+  const fields::Field<double> field = random_integral_field();
+  SectionSampler sampler(5, {});
+  std::mt19937_64 engine(2);
+  sampler.parameters() = 0.3 * Eigen::VectorXd::Random(sampler.parameter_count());
+  const integrators::Rays<double> rays = random_rays(24, engine);
+  Eigen::MatrixXd target = Eigen::MatrixXd::Random(24, 3).array() * 0.5 + 0.5;
+  const Eigen::MatrixXd background = Eigen::RowVector3d(1, 1, 1);
+  DensityActivation density;
+  Eigen::VectorXd gradient, unused;
+  sampler.loss_and_gradient(rays, target, background, streams_of(field), density, 10, gradient);
+  ASSERT_EQ(gradient.size(), sampler.parameter_count());
+  ASSERT_GT(gradient.norm(), 0);
+  auto loss = [&] {
+    return sampler.loss_and_gradient(rays, target, background, streams_of(field), density, 10, unused).loss;
+  };
+  std::uniform_int_distribution<Eigen::Index> pick(0, sampler.parameter_count() - 1);
+  int checked = 0;
+  for (int n = 0; n < 200 && checked < 25; ++n) {
+    const Eigen::Index p = pick(engine);
+    if (std::abs(gradient(p)) < 1e-8) continue;  // a ReLU unit that is off everywhere
+    const double saved = sampler.parameters()(p), h = 1e-6;
+    sampler.parameters()(p) = saved + h;
+    const double plus = loss();
+    sampler.parameters()(p) = saved - h;
+    const double minus = loss();
+    sampler.parameters()(p) = saved;
+    EXPECT_NEAR(gradient(p), (plus - minus) / (2 * h), 1e-5 * (std::abs(gradient(p)) + 1e-3)) << "parameter " << p;
+    ++checked;
+  }
+  EXPECT_GE(checked, 20);
+}
+
+// An integral field along +x only: a thin slab [a, b] of density and of a colour unlike the
+// rest. Φ = (Φ_σ, Φ_r, Φ_g, Φ_b), with the slab's indicator smoothed to width w,
+//   bump(x) = ½(tanh((x − a)/w) − tanh((x − b)/w)),  B(x) = ∫ bump = ½w log(cosh((x−a)/w) / cosh((x−b)/w)),
+//   ∂Φ_σ/∂x = −4 + 12·bump,  ∂Φ_r/∂x = −3 + 6·bump,  ∂Φ_g/∂x = ∂Φ_b/∂x = −3.
+OutputContext::FieldStreams slab_field(double a, double b, double w) {
+  return [a, b, w](const autodiff::StreamLayout& layout, const Eigen::MatrixXd& x) {
+    autodiff::Streams<double> out;
+    out.resize(x.rows(), layout.count(), 4);
+    out.data.setZero();
+    for (Eigen::Index n = 0; n < x.rows(); ++n) {
+      const double s = x(n, 0);
+      const double bump = 0.5 * (std::tanh((s - a) / w) - std::tanh((s - b) / w));
+      const double B = 0.5 * w * (std::log(std::cosh((s - a) / w)) - std::log(std::cosh((s - b) / w)));
+      out.stream(0).row(n) << -4 * s + 12 * B, -3 * s + 6 * B, -3 * s, -3 * s;
+      for (int i = 0; i < layout.tangents(); ++i) {
+        const double along_x = layout.spec().tangents(0, i);
+        out.stream(layout.tangent(i)).row(n) = along_x * Eigen::RowVector4d(-4 + 12 * bump, -3 + 6 * bump, -3, -3);
+      }
+    }
+    return out;
+  };
+}
+
+TEST(SectionSampler, LearnsToEncloseAThinSlab) {
+  const double a = 0.05, b = 0.25;
+  const OutputContext::FieldStreams field = slab_field(a, b, 0.01);
+  // Rays along +x through [−0.6, 0.6], at random heights (the field ignores them).
+  std::mt19937_64 engine(3);
+  std::uniform_real_distribution<double> height(-0.5, 0.5);
+  const Eigen::Index n = 64;
+  integrators::Rays<double> rays;
+  rays.origins.resize(n, 3);
+  rays.directions.resize(n, 3);
+  for (Eigen::Index r = 0; r < n; ++r) {
+    rays.origins.row(r) << -1.0, height(engine), height(engine);
+    rays.directions.row(r) << 1.0, 0.0, 0.0;
+  }
+  rays.depth_scale.setOnes(n);
+  rays.near.setConstant(n, 0.4);
+  rays.far.setConstant(n, 1.6);
+  // The pixels: the same field rendered with 4000 equal sections (converged).
+  SectionSampler fine(4000, {});
+  fine.parameters().setZero();  // zero logits: equal sections
+  DensityActivation density;
+  Eigen::VectorXd unused;
+  const Eigen::MatrixXd background = Eigen::RowVector3d(1, 1, 1);
+  Eigen::MatrixXd truth = Eigen::MatrixXd::Zero(n, 3);
+  {
+    // loss_and_gradient against a black target is ‖C‖²/R per ray, not C; render directly.
+    const integrators::RaySamples<double> sections = fine.sections(rays);
+    const Eigen::MatrixXd x = SectionSampler::end_points(rays, fine.boundaries(rays));
+    autodiff::StreamSpec spec = autodiff::StreamSpec::values(6);
+    const autodiff::Streams<double> phi = field(autodiff::StreamLayout(spec), x);
+    Eigen::MatrixXd means(sections.size(), 4);
+    for (Eigen::Index r = 0; r < n; ++r)
+      for (int i = 0; i < 4000; ++i)
+        means.row(r * 4000 + i) = (phi.stream(0).row(r * 4001 + i + 1) - phi.stream(0).row(r * 4001 + i)) /
+                                  sections.delta(r * 4000 + i);
+    const Shading shading = shade(means, density);
+    truth = integrators::render<double>(sections, shading.sigma, shading.rgb, background).color;
+  }
+  SectionSamplerOptions options;
+  options.learning_rate = 1e-2;
+  options.min_share = 0.1;
+  SectionSampler sampler(4, options);
+  const double before = sampler.loss_and_gradient(rays, truth, background, field, density, 1, unused).loss;
+  for (int step = 0; step < 300; ++step) sampler.update(rays, truth, background, field, density, 1);
+  const double after = sampler.loss_and_gradient(rays, truth, background, field, density, 1, unused).loss;
+  // Equal sections: 3.0e-2; after 300 steps 3.0e-6, the boundaries at x = 0.046 and 0.254.
+  EXPECT_LT(after, 1e-3 * before) << "before " << before;
+  // A section now lies close around the slab (x = t − 1 along these rays).
+  const Eigen::MatrixXd t = sampler.boundaries(rays);
+  double tightest = 1e9;
+  for (int i = 0; i < 4; ++i)
+    if (t(0, i) - 1 <= a + 0.01 && t(0, i + 1) - 1 >= b - 0.01) tightest = std::min(tightest, t(0, i + 1) - t(0, i));
+  EXPECT_LT(tightest, 0.22) << "the slab is 0.2 long, equal sections 0.3";
+}
+
+TEST(SectionSampler, IsSavedAndLoadedWithItsAdamState) {
+  const fields::Field<double> field = random_integral_field();
+  std::mt19937_64 engine(4);
+  const integrators::Rays<double> rays = random_rays(16, engine);
+  const Eigen::MatrixXd target = Eigen::MatrixXd::Constant(16, 3, 0.5);
+  const Eigen::MatrixXd background = Eigen::RowVector3d(1, 1, 1);
+  SectionSampler trained(6, {});
+  for (int i = 0; i < 3; ++i) trained.update(rays, target, background, streams_of(field), {}, 10);
+  const auto path = testutil::scratch_dir("section_sampler") / "sampler.h5";
+  {
+    io::H5Writer file(path);
+    trained.save(file, "sampler");
+    file.commit();
+  }
+  SectionSampler loaded(6, {});
+  loaded.load(io::H5Reader(path), "sampler");
+  EXPECT_EQ(loaded.parameters(), trained.parameters());
+  // The same next step: the Adam moments and step count came along.
+  trained.update(rays, target, background, streams_of(field), {}, 10);
+  loaded.update(rays, target, background, streams_of(field), {}, 10);
+  EXPECT_EQ(loaded.parameters(), trained.parameters());
+  EXPECT_EQ(loaded.boundaries(rays), trained.boundaries(rays));
+
+  SectionSampler other_shape(7, {});
+  try {
+    other_shape.load(io::H5Reader(path), "sampler");
+    FAIL() << "a sampler of 6 sections loaded into one of 7";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("6 sections"), std::string::npos) << e.what();
+  }
 }
 
 double run_loss(const std::filesystem::path& dir, int steps, bool test_views) {
@@ -192,6 +411,29 @@ TEST(AutointNerf, ShortTrainingLowersTheLossAndRendersTestViews) {
   render_checkpoint(dir / "trained/checkpoint.h5", turntable, dir / "turntable");
   const io::Image frame = io::read_png(dir / "turntable/turntable_001_render.png");
   EXPECT_EQ(frame.width, 128);
+}
+
+TEST(AutointNerf, SamplingNetworkTrainsBesideTheFieldAndRendersFromTheCheckpoint) {
+  const auto dir = testutil::scratch_dir("autoint_nerf_sampler");
+  std::string text = autoint_config("{sections: 8, samples_per_section: 2, density_scale: 10, sampler: {every: 2}}",
+                                    "output: {dir: " + (dir / "run").string() + "}\n", true);
+  RunSetup setup = load_run(testutil::write_config("autoint_sampler", text), {});
+  EXPECT_EQ(execute_run(setup, {}), 0);
+  std::ifstream in(dir / "run/metrics.json");
+  const auto metrics = nlohmann::json::parse(in);
+  EXPECT_EQ(metrics["sampling_network"].get<double>(), 1.0);
+  EXPECT_GT(metrics["sampler_parameters"].get<double>(), 1000.0);
+  EXPECT_GT(metrics["sampler_max_section_share"].get<double>(), 1.0);
+  EXPECT_GT(metrics["psnr_mean"].get<double>(), 13.0);
+  EXPECT_TRUE(io::H5Reader(dir / "run/checkpoint.h5").has_group("sampler"));
+  // `nfield render` of the test poses from the checkpoint gives the run's own PSNR: the
+  // sampling network came back with the field.
+  RenderRequest poses;
+  poses.poses = kBunny / "transforms_test.json";
+  render_checkpoint(dir / "run/checkpoint.h5", poses, dir / "rendered");
+  const io::Image rendered = io::read_png(dir / "rendered/view_007_render.png");
+  const io::Image written = io::read_png(dir / "run/test_views/test_007_render.png");
+  EXPECT_EQ(rendered.pixels, written.pixels);
 }
 
 }  // namespace

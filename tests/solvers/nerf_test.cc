@@ -71,7 +71,7 @@ TEST(Nerf, ImportanceSamplesFollowTheFieldsWeights) {
     out.col(0) = (x.col(0).array().abs() < 0.05).select(Eigen::VectorXd::Constant(x.rows(), 5.0),
                                                          Eigen::VectorXd::Constant(x.rows(), -20.0));
     return out;
-  });
+  }, nullptr);
   Random rng(7);
   const TermPoints points = setup.problem->loss_terms()[0].sample(rng, 32);
   int crossing = 0, in_slab = 0, fine_total = 0;
