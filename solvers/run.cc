@@ -272,12 +272,12 @@ void check_stage_sizes(const RunSetup& s) {
   }
 }
 
-}  // namespace
-
-RunSetup load_run(const std::filesystem::path& config, const std::vector<std::string>& overrides,
-                  const std::filesystem::path& out_dir_override,
-                  const std::filesystem::path& data_dir) {
-  RunSetup s{.config_path = config, .root = io::load_config(config, overrides)};
+// The setup of a config already parsed; `config` names it (and its folder is the default
+// data folder).
+RunSetup setup_run(io::ConfigNode root, const std::filesystem::path& config,
+                   const std::filesystem::path& out_dir_override,
+                   const std::filesystem::path& data_dir) {
+  RunSetup s{.config_path = config, .root = std::move(root)};
   // A bare file name ("nfield run poisson.yaml") has an empty parent: its folder is ".".
   s.data_dir = !data_dir.empty()         ? data_dir
                : config.has_parent_path() ? config.parent_path()
@@ -334,25 +334,43 @@ RunSetup load_run(const std::filesystem::path& config, const std::vector<std::st
   return s;
 }
 
+}  // namespace
+
+RunSetup load_run(const std::filesystem::path& config, const std::vector<std::string>& overrides,
+                  const std::filesystem::path& out_dir_override,
+                  const std::filesystem::path& data_dir) {
+  return setup_run(io::load_config(config, overrides), config, out_dir_override, data_dir);
+}
+
 int execute_run(RunSetup& setup, const std::filesystem::path& resume) {
   return setup.training.precision == "double" ? train_and_write<double>(setup, resume)
                                               : train_and_write<float>(setup, resume);
 }
 
 namespace {
-// The run a checkpoint was trained by: its config (copied into out_dir) and data folder.
+// The folder a checkpoint's relative data paths resolve in. Checkpoints written before
+// config_dir existed: the cwd.
+std::filesystem::path checkpoint_data_dir(const io::H5Reader& file) {
+  return file.has_attribute("/", "config_dir")
+             ? std::filesystem::path(file.read_attribute<std::string>("/", "config_dir"))
+             : std::filesystem::current_path();
+}
+
+// The run a checkpoint was trained by, its config copied into out_dir (messages name the copy).
 RunSetup checkpoint_run(const io::H5Reader& file, const std::filesystem::path& out_dir) {
   const std::string config_text = file.read_attribute<std::string>("/", "config");
   const std::filesystem::path config_copy = out_dir / "config.yaml";
   std::filesystem::create_directories(out_dir);
   io::write_atomically(config_copy, [&](const std::filesystem::path& p) { std::ofstream(p) << config_text; });
-  // Checkpoints written before config_dir existed: relative paths resolve in the cwd.
-  const std::filesystem::path data_dir = file.has_attribute("/", "config_dir")
-                                             ? std::filesystem::path(file.read_attribute<std::string>("/", "config_dir"))
-                                             : std::filesystem::current_path();
-  return load_run(config_copy, {}, out_dir, data_dir);
+  return load_run(config_copy, {}, out_dir, checkpoint_data_dir(file));
 }
 }  // namespace
+
+RunSetup load_checkpoint_run(const io::H5Reader& file) {
+  const std::filesystem::path name = file.path().string() + ":config";
+  return setup_run(io::parse_config(file.read_attribute<std::string>("/", "config"), name.string()),
+                   name, {}, checkpoint_data_dir(file));
+}
 
 void render_checkpoint(const std::filesystem::path& checkpoint, const RenderRequest& request,
                        const std::filesystem::path& out_dir) {

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "fields/field.h"
+#include "io/hdf5_file.h"
 #include "solvers/output/output_options.h"
 #include "solvers/problem.h"
 #include "solvers/training/training_options.h"
@@ -42,6 +43,11 @@ struct RunSetup {
 RunSetup load_run(const std::filesystem::path& config, const std::vector<std::string>& overrides,
                   const std::filesystem::path& out_dir_override = {},
                   const std::filesystem::path& data_dir = {});
+
+// The run a checkpoint was trained by, from the config stored in it (relative data paths
+// resolve where that run read them): its problem, field options and the rest. Writes
+// nothing; messages name the config as CHECKPOINT:config.
+RunSetup load_checkpoint_run(const io::H5Reader& file);
 
 // Trains and writes the outputs. Returns 0 when finished, 130 when interrupted by a signal
 // (outputs and checkpoint of the state reached are still written).

@@ -1,0 +1,175 @@
+# SPDX-License-Identifier: MIT
+"""The Python module against the library: derivatives of a checkpoint's field against finite
+differences, a run returning its metrics, and the exceptions bad input raises. CTest runs each
+class with PYTHONPATH at the built module (python/CMakeLists.txt)."""
+import json
+import os
+import tempfile
+import unittest
+
+import numpy as np
+
+import nfield
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+TINY = os.path.join(HERE, "tiny_poisson.yaml")
+
+
+def train(out, *assignments):
+    return nfield.run(TINY, set=["training.stages[0].steps=5", *assignments], out=out)
+
+
+class FieldTest(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.tmp = tempfile.TemporaryDirectory()
+        soft, hard = os.path.join(cls.tmp.name, "soft"), os.path.join(cls.tmp.name, "hard")
+        train(soft)
+        # The same problem with u = 0 enforced exactly: u = φ·N, φ vanishing on the boundary.
+        train(hard, 'conditions=[{on: boundary, type: dirichlet, value: "0", enforce: hard}]')
+        cls.field = nfield.load(os.path.join(soft, "checkpoint.h5"))
+        cls.hard = nfield.load(os.path.join(hard, "checkpoint.h5"))
+        cls.network = nfield.load(os.path.join(hard, "checkpoint.h5"), ansatz=False)
+        rng = np.random.default_rng(1)
+        cls.x = np.asfortranarray(rng.uniform(0.1, 0.9, size=(7, 2)))
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.tmp.cleanup()
+
+    def differences(self, f, h):
+        """Central differences of u at self.x: gradient (N, m, d) and Laplacian (N, m)."""
+        u = f(self.x)
+        gradient = np.empty(u.shape + (2,))
+        laplacian = -4 * u
+        for i in range(2):
+            step = np.zeros(2)
+            step[i] = h
+            plus, minus = f(self.x + step), f(self.x - step)
+            gradient[:, :, i] = (plus - minus) / (2 * h)
+            laplacian += plus + minus
+        return gradient, laplacian / h**2
+
+    def test_shapes(self):
+        f = self.field
+        self.assertEqual((f.input_dim, f.output_dim), (2, 1))
+        self.assertEqual(f.values(self.x).shape, (7, 1))
+        self.assertEqual(f.gradient(self.x).shape, (7, 1, 2))
+        self.assertEqual(f.laplacian(self.x).shape, (7, 1))
+        self.assertIn("problem: poisson", f.config)
+        self.assertFalse(f.has_ansatz)
+
+    def test_gradient_and_laplacian_match_differences(self):
+        for f in (self.field, self.hard):
+            gradient, _ = self.differences(f, 1e-5)
+            _, laplacian = self.differences(f, 1e-3)
+            np.testing.assert_allclose(f.gradient(self.x), gradient, rtol=1e-6, atol=1e-7)
+            np.testing.assert_allclose(f.laplacian(self.x), laplacian, rtol=1e-4, atol=1e-4)
+
+    def test_operator_and_taylor_streams_match_differences(self):
+        # C = (e_x e_yᵀ + e_y e_xᵀ)/2 gives ∂²u/∂x∂y; a Taylor series of order 2 along w gives
+        # (1/2) d²u/dτ² at x + τw.
+        w = np.array([[0.6], [0.8]])
+        s = self.field.streams(self.x, operators=[[[0, 0.5], [0.5, 0]]], taylor_directions=w,
+                               taylor_order=2)
+        self.assertEqual(s["operators"].shape, (7, 1, 1))
+        self.assertEqual(s["taylor"].shape, (7, 1, 1, 2))
+        h = 1e-3
+        f = self.field
+        mixed = (f(self.x + [h, h]) - f(self.x + [h, -h]) - f(self.x + [-h, h])
+                 + f(self.x - [h, h])) / (4 * h * h)
+        along = w[:, 0] * h
+        second = (f(self.x + along) - 2 * f(self.x) + f(self.x - along)) / (h * h)
+        np.testing.assert_allclose(s["operators"][:, :, 0], mixed, rtol=1e-4, atol=1e-4)
+        np.testing.assert_allclose(2 * s["taylor"][:, :, 0, 1], second, rtol=1e-4, atol=1e-4)
+        np.testing.assert_allclose(s["taylor"][:, :, 0, 0],
+                                   f.gradient(self.x)[:, :, :] @ w[:, 0], rtol=1e-12)
+
+    def test_streams_are_views_of_one_block(self):
+        s = self.field.streams(self.x, operators=np.eye(2))
+        self.assertIs(s["value"].base, s["tangents"].base)
+        self.assertIs(s["value"].base, s["operators"].base)
+        np.testing.assert_allclose(s["operators"][:, :, 0], self.field.laplacian(self.x))
+
+    def test_c_ordered_and_list_points_give_the_same_values(self):
+        expected = self.field(self.x)
+        np.testing.assert_array_equal(self.field(np.ascontiguousarray(self.x)), expected)
+        np.testing.assert_array_equal(self.field(self.x.tolist()), expected)
+        np.testing.assert_array_equal(self.field(self.x.astype(np.float32)),
+                                      self.field(self.x.astype(np.float32).astype(float)))
+
+    def test_ansatz_vanishes_on_the_boundary(self):
+        self.assertTrue(self.hard.has_ansatz)
+        edge = np.array([[0.0, 0.3], [1.0, 0.7], [0.4, 0.0], [0.5, 1.0]])
+        np.testing.assert_allclose(self.hard(edge), 0, atol=1e-14)
+        self.assertGreater(np.abs(self.network(edge)).max(), 1e-6)
+
+
+class RunTest(unittest.TestCase):
+    def test_run_returns_its_metrics(self):
+        with tempfile.TemporaryDirectory() as out:
+            metrics = nfield.run(TINY, set={"training.stages[0].steps": 7, "output.png": False},
+                                 out=out)
+            with open(os.path.join(out, "metrics.json")) as f:
+                self.assertEqual(metrics, json.load(f))
+            self.assertEqual(metrics["problem"], "poisson")
+            self.assertEqual(metrics["steps"], 7)
+            self.assertTrue(metrics["finished"])
+            self.assertGreater(metrics["rel_l2"], 0)
+            self.assertEqual([s["optimizer"] for s in metrics["stages"]], ["adam"])
+            resumed = nfield.run(TINY, set=["training.stages[0].steps=7"], out=out,
+                                 resume=os.path.join(out, "checkpoint.h5"))
+            self.assertTrue(resumed["finished"])
+            with self.assertRaises(nfield.H5Error):
+                nfield.run(TINY, out=out, resume=TINY)
+
+    def test_validate_resolves_overrides(self):
+        text = nfield.validate(TINY, set={"training.seed": 4})
+        self.assertIn("seed: 4", text)
+        self.assertIn("steps: 20", text)
+
+
+class ErrorsTest(unittest.TestCase):
+    def test_bad_config_raises_the_located_message(self):
+        with self.assertRaises(nfield.ConfigError) as raised:
+            nfield.run(os.path.join(HERE, "bad_stage.yaml"))
+        self.assertRegex(str(raised.exception),
+                         r"bad_stage\.yaml:12:32: training\.stages\[0\]\.steps: expected an "
+                         r"integer in \[0, \d+\], got '-3'")
+        self.assertIsInstance(raised.exception, ValueError)
+
+    def test_bad_override_raises(self):
+        with self.assertRaisesRegex(nfield.ConfigError, r"unknown key 'stepz'"):
+            nfield.validate(TINY, set=["training.stages[0].stepz=3"])
+        with self.assertRaisesRegex(TypeError, "got a string"):
+            nfield.validate(TINY, set="training.seed=3")
+
+    def test_missing_files(self):
+        with self.assertRaisesRegex(FileNotFoundError, "nowhere.yaml: config not found"):
+            nfield.run("nowhere.yaml")
+        with self.assertRaisesRegex(FileNotFoundError, "nowhere.h5: checkpoint not found"):
+            nfield.load("nowhere.h5")
+
+    def test_a_file_that_is_no_checkpoint(self):
+        with self.assertRaises(nfield.H5Error):
+            nfield.load(TINY)
+
+    def test_wrong_points(self):
+        with tempfile.TemporaryDirectory() as out:
+            train(out)
+            f = nfield.load(os.path.join(out, "checkpoint.h5"))
+        with self.assertRaisesRegex(ValueError,
+                                    r"points: expected an array of shape \(N, 2\), got shape "
+                                    r"\(5, 3\)"):
+            f(np.zeros((5, 3)))
+        with self.assertRaisesRegex(ValueError, r"got shape \(4,\)"):
+            f.gradient(np.zeros(4))
+        with self.assertRaisesRegex(TypeError, "expected an array of numbers"):
+            f.laplacian([["a", "b"]])
+        with self.assertRaisesRegex(ValueError, r"operators\[0\]: expected an array of shape "
+                                                r"\(2, 2\), got shape \(3, 3\)"):
+            f.streams(np.zeros((1, 2)), operators=[np.eye(3)])
+
+
+if __name__ == "__main__":
+    unittest.main()
