@@ -301,6 +301,9 @@ struct ConfigNode::KeyLog {
 ConfigNode::ConfigNode(YAML::Node node, std::string file)
     : ConfigNode(node, node.Mark(), std::move(file), "", std::make_shared<KeyLog>()) {}
 
+ConfigNode::ConfigNode(YAML::Node node, YAML::Mark mark, std::string file)
+    : ConfigNode(std::move(node), mark, std::move(file), "", std::make_shared<KeyLog>()) {}
+
 ConfigNode::ConfigNode(YAML::Node node, YAML::Mark mark, std::string file, std::string path,
                        std::shared_ptr<KeyLog> log)
     : node_(std::move(node)),
@@ -338,7 +341,10 @@ std::optional<ConfigNode::Entry> ConfigNode::find(std::string_view key) const {
 
 YAML::Node ConfigNode::require_value(std::string_view key) const {
   std::optional<Entry> entry = find(key);
-  if (!entry) throw error("missing required key '" + std::string(key) + "'");
+  // Located at the mapping that lacks it, named by the path the key would have.
+  if (!entry)
+    throw ConfigError(file_, mark_, child_path(key),
+                      "missing required key '" + std::string(key) + "'");
   return entry->value;
 }
 
@@ -364,6 +370,16 @@ ConfigNode ConfigNode::at(std::size_t index) const {
 template <ConfigValue T>
 T ConfigNode::as() const {
   return convert<T>(node_, Where{file_, mark_, path_});
+}
+
+bool ConfigNode::has_list(std::string_view key) const {
+  const std::optional<Entry> entry = find(key);
+  return entry && entry->value.IsSequence();
+}
+
+bool ConfigNode::has_map(std::string_view key) const {
+  const std::optional<Entry> entry = find(key);
+  return entry && entry->value.IsMap();
 }
 
 bool ConfigNode::has(std::string_view key) const {
@@ -482,7 +498,8 @@ ConfigNode ConfigNode::child(std::string_view key) const {
 ConfigNode ConfigNode::child_or_empty(std::string_view key) const {
   std::optional<Entry> entry = find(key);
   if (!entry || is_empty(entry->value))
-    return ConfigNode(YAML::Node(YAML::NodeType::Map), entry ? own_mark(entry->key) : YAML::Mark::null_mark(),
+    // An absent section's errors point at the mapping it would go into.
+    return ConfigNode(YAML::Node(YAML::NodeType::Map), entry ? own_mark(entry->key) : mark_,
                       file_, child_path(key), log_);
   return child(key);
 }
@@ -516,7 +533,7 @@ void ConfigNode::check_keys(const YAML::Node& node, const std::string& path,
   for (const auto& entry : node) {
     const std::string& key = entry.first.Scalar();
     if (std::find(valid.begin(), valid.end(), key) == valid.end())
-      throw ConfigError(file_, own_mark(entry.first), path,
+      throw ConfigError(file_, own_mark(entry.first), join_key(path, key),
                         "unknown key '" + key + "' (valid keys: " + join(valid) + ")");
   }
 }
@@ -594,7 +611,10 @@ ConfigNode parse_config(std::string_view text, std::string file_name,
   if (!root.IsMap())
     throw ConfigError(file_name, root.Mark(), "",
                       "expected a mapping of keys at the top level, got " + describe(root));
-  return ConfigNode(root, std::move(file_name));
+  // A file without keys (empty, comments only) is still a place: errors about the keys it
+  // lacks point at its start.
+  const YAML::Mark mark = root.Mark().is_null() ? YAML::Mark() : root.Mark();
+  return ConfigNode(root, mark, std::move(file_name));
 }
 
 ConfigNode load_config(const std::filesystem::path& path,

@@ -48,7 +48,8 @@ namespace nfield::io {
 
 // An error in a configuration. what() is one line, `FILE:LINE:COL: KEY.PATH: message`,
 // with LINE and COL 1-based; parts that are unknown are left out with their colon
-// (a node created by --set has no line, the root has no key path).
+// (a node created by --set has no line, the root has no key path). An unknown or a missing
+// key is named by its own path (`training.lrr`), at the key or at the mapping that lacks it.
 class ConfigError : public std::runtime_error {
  public:
   ConfigError(std::string file, const YAML::Mark& mark, std::string key_path,
@@ -96,6 +97,8 @@ class ConfigNode {
  public:
   // Wraps `node`; `file` is used in messages only. Usually made by load_config.
   ConfigNode(YAML::Node node, std::string file);
+  // The same, located at `mark` (a node made in code that stands for a place in the file).
+  ConfigNode(YAML::Node node, YAML::Mark mark, std::string file);
 
   // ---- this node ---------------------------------------------------------------
   bool is_map() const { return node_.IsMap(); }
@@ -123,6 +126,10 @@ class ConfigNode {
   // ---- keys of a mapping ------------------------------------------------------
   // All of these mark `key` as a valid key of this mapping, present or not.
   bool has(std::string_view key) const;
+  // Whether `key` is present with a list / a mapping as its value (for keys that take
+  // either one value or a list or mapping of them).
+  bool has_list(std::string_view key) const;
+  bool has_map(std::string_view key) const;
   // Required value; `missing required key 'lr'` if absent.
   template <ConfigValue T>
   T get(std::string_view key) const;

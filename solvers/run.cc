@@ -54,6 +54,7 @@ OutputOptions output_options(const io::ConfigNode& node, const Domain& domain,
                              const std::filesystem::path& out_override) {
   OutputOptions o;
   o.dir = node.get_or("dir", ("out/" + config.stem().string()));
+  node.require("dir", !o.dir.empty(), "expected a folder name, got an empty string");
   if (!out_override.empty()) o.dir = out_override;
   const int d = domain.space_dim();
   const int fallback = d == 1 ? 256 : d == 2 ? 128 : 48;

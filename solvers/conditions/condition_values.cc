@@ -8,7 +8,7 @@ namespace nfield::solvers {
 std::vector<io::Expression> channel_expressions(const io::ConfigNode& node, std::string_view key,
                                                 const Domain& domain, int output_dim) {
   std::vector<io::Expression> out;
-  if (node.has(key) && node.yaml()[std::string(key)].IsSequence()) {
+  if (node.has_list(key)) {
     const io::ConfigNode list = node.child(key);
     node.require(key, static_cast<int>(list.size()) == output_dim,
                  "expected " + std::to_string(output_dim) + " expressions, one per output channel");
@@ -37,7 +37,7 @@ Eigen::MatrixXd evaluate_channels(const std::vector<io::Expression>& expressions
 
 std::vector<Face> condition_faces(const io::ConfigNode& item, const Domain& domain) {
   std::vector<std::string> names;
-  if (item.yaml()["on"].IsSequence())
+  if (item.has_list("on"))
     names = item.get<std::vector<std::string>>("on");
   else
     names = {item.get<std::string>("on")};

@@ -33,7 +33,7 @@ std::vector<LossTerm> condition_terms(const io::ConfigNode& conditions, const Do
       item.reject_unknown_keys();
       continue;  // enforced by the ansatz, no loss term
     }
-    const bool initial = item.has("on") && !item.yaml()["on"].IsSequence() &&
+    const bool initial = item.has("on") && !item.has_list("on") &&
                          Registry<int>::lower(item.get<std::string>("on")) == "initial";
     LossTerm term;
     term.weight = item.get_or("weight", 1.0);

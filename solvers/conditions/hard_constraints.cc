@@ -373,7 +373,7 @@ std::shared_ptr<const Ansatz> read_ansatz(const io::ConfigNode& conditions, cons
     if (item.get_choice("enforce", {"soft", "hard"}, "soft") != "hard") continue;
     item.require("weight", !item.has("weight"),
                  "a hard condition (enforce: hard) is no loss term and takes no weight");
-    const bool initial = item.has("on") && !item.yaml()["on"].IsSequence() &&
+    const bool initial = item.has("on") && !item.has_list("on") &&
                          Registry<int>::lower(item.get<std::string>("on")) == "initial";
     const auto values = channel_expressions(item, "value", domain, output_dim);
     if (initial) {

@@ -270,7 +270,7 @@ class Eikonal final : public Problem {
     const io::ConfigNode training = context.root.child_or_empty("training");
     const std::size_t stages = training.has("stages") ? training.child("stages").size() : 1;
     const auto is_list = [&](const char* key) {
-      return equation.has(key) && equation.yaml()[key].IsSequence();
+      return equation.has_list(key);
     };
     viscosity_ = is_list("viscosity")
                      ? per_stage<double>(equation, "viscosity", stages,

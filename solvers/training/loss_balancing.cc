@@ -28,7 +28,7 @@ AdaptiveOptions adaptive_from_config(const io::ConfigNode& training) {
 BalanceOptions balance_from_config(const io::ConfigNode& training) {
   BalanceOptions o;
   if (!training.has("balance")) return o;
-  if (training.yaml()["balance"].IsMap()) {
+  if (training.has_map("balance")) {
     const io::ConfigNode b = training.child("balance");
     o.method = b.get_choice("method", {"fixed", "grad_norm"});
     if (b.has("every")) o.every = b.get_in_range("every", 1, 1 << 30);

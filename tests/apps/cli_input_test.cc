@@ -99,19 +99,19 @@ std::vector<BadConfig> bad_configs() {
   const std::string base = kBase;
   return {
       // Unknown keys, at every level.
-      {"UnknownTopLevelKey", base + "solver: fast\n", "|solver", "",
+      {"UnknownTopLevelKey", base + "solver: fast\n", "|solver", "solver",
        {"unknown key 'solver' (valid keys: ", "problem", "domain", "training", "output"}},
-      {"UnknownStageKey", edit("lr: 1.0e-3}", "lrr: 1.0e-3}"), "|lrr", "training.stages[0]",
+      {"UnknownStageKey", edit("lr: 1.0e-3}", "lrr: 1.0e-3}"), "|lrr", "training.stages[0].lrr",
        {"unknown key 'lrr' (valid keys: optimizer, steps, lr, schedule, lr_final, seconds)"}},
-      {"UnknownFieldKey", edit("  hidden: [8, 8]", "  hiden: [8, 8]"), "|hiden", "field",
+      {"UnknownFieldKey", edit("  hidden: [8, 8]", "  hiden: [8, 8]"), "|hiden", "field.hiden",
        {"unknown key 'hiden'", "hidden"}},
       {"UnknownConditionKey", edit("value: \"0\"}", "value: \"0\", wieght: 2}"), "|wieght",
-       "conditions[0]", {"unknown key 'wieght'", "weight"}},
+       "conditions[0].wieght", {"unknown key 'wieght'", "weight"}},
       {"UnknownDomainKey", edit("  upper: [1, 1]\n", "  upper: [1, 1]\n  tme: [0, 1]\n"), "|tme",
-       "domain", {"unknown key 'tme'", "time"}},
-      {"UnknownOutputKey", base + "  every: 3\n", "|every", "output",
+       "domain.tme", {"unknown key 'tme'", "time"}},
+      {"UnknownOutputKey", base + "  every: 3\n", "|every", "output.every",
        {"unknown key 'every'", "grid", "frames"}},
-      {"UnknownEquationKey", edit("  exact:", "  exakt:"), "|exakt", "equation",
+      {"UnknownEquationKey", edit("  exact:", "  exakt:"), "|exakt", "equation.exakt",
        {"unknown key 'exakt'", "source", "exact"}},
       // Wrong types.
       {"StringForNumber", edit("lr: 1.0e-3", "lr: fast"), "lr: |fast", "training.stages[0].lr",
@@ -140,9 +140,11 @@ std::vector<BadConfig> bad_configs() {
        "    |[]", "training.stages", {"expected a non-empty list of stages"}},
       // Batch entries are point kinds: a misspelled one is an error.
       {"MisspelledBatchKey", edit("batch: {interior: 32,", "batch: {interor: 32,"),
-       "batch: {|interor", "training.batch", {"unknown key 'interor' (valid keys: interior, boundary, initial)"}},
+       "batch: {|interor", "training.batch.interor",
+       {"unknown key 'interor' (valid keys: interior, boundary, initial)"}},
       {"MisspelledBoundaryBatchKey", edit("boundary: 16}", "boundry: 16}"), "|boundry: 16",
-       "training.batch", {"unknown key 'boundry' (valid keys: interior, boundary, initial)"}},
+       "training.batch.boundry",
+       {"unknown key 'boundry' (valid keys: interior, boundary, initial)"}},
       // Lists of the wrong length.
       {"UpperLongerThanLower", edit("upper: [1, 1]", "upper: [1, 1, 1]"), "upper: |[1, 1, 1]",
        "domain.upper", {"expected a list of 2 numbers, got a list of 3"}},
@@ -170,7 +172,7 @@ std::vector<BadConfig> bad_configs() {
       {"NerfBadBackground", nerf(kNerfTrain + "  background: grey\n"), "background: |grey",
        "data.background", {"expected one of white, black, random; got 'grey'"}},
       {"NerfUnknownOccupancyKey", nerf(kNerfTrain, "  occupancy: {resolution: 32, evry: 4}\n"),
-       "32, |evry", "render.occupancy", {"unknown key 'evry'", "every"}},
+       "32, |evry", "render.occupancy.evry", {"unknown key 'evry'", "every"}},
       // Expressions.
       {"UnbalancedExpression", edit("-2*pi^2*sin(pi*x)*sin(pi*y)", "-2*pi^2*sin(pi*x"),
        // muparser gives no position for a missing parenthesis: the value's start.
@@ -181,13 +183,15 @@ std::vector<BadConfig> bad_configs() {
       {"BadExpressionInValueList", edit("value: \"0\"}", "value: [\"sin(pi*x\"]}"),
        "value: [|\"sin(pi*x\"]", "conditions[0].value[0]", {"in expression 'sin(pi*x'"}},
       // Missing required keys.
-      {"MissingProblem", edit("problem: poisson\n", ""), "|domain:", "",
+      {"MissingProblem", edit("problem: poisson\n", ""), "|domain:", "problem",
        {"missing required key 'problem'"}},
-      {"MissingDomain", edit("domain:\n  lower: [0, 0]\n  upper: [1, 1]\n", ""), "|problem", "",
+      {"MissingDomain", edit("domain:\n  lower: [0, 0]\n  upper: [1, 1]\n", ""), "|problem",
+       "domain",
        {"missing required key 'domain'"}},
       {"MissingSource", edit("  source: \"-2*pi^2*sin(pi*x)*sin(pi*y)\"\n", ""), "  |exact",
-       "equation", {"missing required key 'source'"}},
-      {"EmptyFile", "", "", "", {"missing required key 'problem'"}},
+       "equation.source", {"missing required key 'source'"}},
+      // A file without keys is still a place: its start.
+      {"EmptyFile", "", "|", "problem", {"missing required key 'problem'"}},
       // Conditions.
       {"BadFaceName", edit("on: boundary", "on: w_min"), "on: |w_min", "conditions[0].on",
        {"unknown face 'w_min' (valid: x_max, x_min, y_max, y_min), or boundary, initial"}},
@@ -208,7 +212,7 @@ std::vector<BadConfig> bad_configs() {
       {"SetIndexOutOfRange", base, "", "training.stages",
        {"index 3 out of range (the list has 1 items)"}, {"--set", "training.stages[3].lr=1"},
        "--set 'training.stages[3].lr=1'"},
-      {"SetUnknownKey", base, "", "training", {"unknown key 'sead'", "seed"},
+      {"SetUnknownKey", base, "", "training.sead", {"unknown key 'sead'", "seed"},
        {"--set", "training.sead=3"}},
   };
 }

@@ -589,7 +589,7 @@ TEST(HashGridConfig, BadValuesNameFileLineAndKey) {
   expect_error(edited("finest_resolution: 64", "finest_resolution: 4"), 10,
                "field.encoding.finest_resolution", "base_resolution = 8");
   expect_error(edited("init_scale: 0.01", "init_scale: 0"), 13, "field.encoding.init_scale", "> 0");
-  expect_error(edited("levels: 6", "level: 6"), 6, "field.encoding", "unknown key 'level'");
+  expect_error(edited("levels: 6", "level: 6"), 6, "field.encoding.level", "unknown key 'level'");
 }
 
 TEST(HashGridOptions, ValidationNamesTheOptionAndTheRule) {

@@ -69,7 +69,7 @@ const std::vector<ErrorCase> kErrorCases = {
      "cfg.yaml:6:9: training.seed: expected an integer, got '1.5'"},
     {"MissingRequiredKey",
      [] { config().child("training").child("stages").at(1).get<double>("lr"); },
-     "cfg.yaml:9:7: training.stages[1]: missing required key 'lr'"},
+     "cfg.yaml:9:7: training.stages[1].lr: missing required key 'lr'"},
     {"UnknownKey",
      [] {
        ConfigNode stage = config().child("training").child("stages").at(1);
@@ -77,7 +77,7 @@ const std::vector<ErrorCase> kErrorCases = {
        stage.get_or("lr", 1e-3);
        stage.reject_unknown_keys();
      },
-     "cfg.yaml:10:7: training.stages[1]: unknown key 'lrr' (valid keys: optimizer, lr)"},
+     "cfg.yaml:10:7: training.stages[1].lrr: unknown key 'lrr' (valid keys: optimizer, lr)"},
     {"UnknownKeyRecursive",
      [] {
        ConfigNode root = config();
@@ -92,9 +92,9 @@ const std::vector<ErrorCase> kErrorCases = {
        }
        root.reject_unknown_keys_recursive();
      },
-     "cfg.yaml:10:7: training.stages[1]: unknown key 'lrr' (valid keys: optimizer, steps, lr)"},
+     "cfg.yaml:10:7: training.stages[1].lrr: unknown key 'lrr' (valid keys: optimizer, steps, lr)"},
     {"ExpectKeys", [] { config().child("output").expect_keys({"every", "big", "flag"}); },
-     "cfg.yaml:13:3: output: unknown key 'dir' (valid keys: every, big, flag)"},
+     "cfg.yaml:13:3: output.dir: unknown key 'dir' (valid keys: every, big, flag)"},
     {"BadListLength", [] { config().child("domain").get_list<double>("lower", 3); },
      "cfg.yaml:3:10: domain.lower: expected a list of 3 numbers, got a list of 2"},
     {"ScalarForList", [] { config().get_list<double>("problem", 2); },
@@ -305,8 +305,51 @@ TEST(ConfigNode, RecursiveCheckFindsNestedUnknownKey) {
     FAIL();
   } catch (const ConfigError& e) {
     EXPECT_EQ(std::string(e.what()),
-              "t.yaml:3:3: field: unknown key 'hiden' (valid keys: type, hidden)");
+              "t.yaml:3:3: field.hiden: unknown key 'hiden' (valid keys: type, hidden)");
   }
+}
+
+// What `f` throws as a ConfigError, or "" if nothing.
+template <class F>
+std::string config_error(F f) {
+  try {
+    f();
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(ConfigNode, KeysMissingFromAFileWithoutKeysPointAtItsStart) {
+  for (const char* text : {"", "# only a comment\n"})
+    EXPECT_EQ(config_error([&] { parse_config(text, "e.yaml").get<std::string>("problem"); }),
+              "e.yaml:1:1: problem: missing required key 'problem'")
+        << text;
+}
+
+TEST(ConfigNode, KeysOfAnAbsentSectionPointAtItsParent) {
+  const ConfigNode root = parse_config("problem: poisson\nfield: {type: siren}\n", "a.yaml");
+  EXPECT_EQ(config_error([&] { root.child_or_empty("training").get<int>("steps"); }),
+            "a.yaml:1:1: training.steps: missing required key 'steps'");
+  EXPECT_EQ(config_error([&] { root.child("field").child_or_empty("encoding").get<int>("n"); }),
+            "a.yaml:2:8: field.encoding.n: missing required key 'n'");
+}
+
+TEST(ConfigNode, HasListAndHasMapTellTheKindOfAValue) {
+  const ConfigNode root =
+      parse_config("item: {on: [x_min], value: \"0\", balance: {method: fixed}}\n", "h.yaml");
+  const ConfigNode item = root.child("item");
+  EXPECT_TRUE(item.has_list("on"));
+  EXPECT_FALSE(item.has_list("value"));
+  EXPECT_FALSE(item.has_list("absent"));  // no exception for a key that is not there
+  EXPECT_TRUE(item.has_map("balance"));
+  EXPECT_FALSE(item.has_map("on"));
+  item.get<std::string>("value");
+  item.child("balance").get<std::string>("method");
+  EXPECT_NO_THROW(root.reject_unknown_keys_recursive());  // has_* count as asking for the key
+  // On a value that is no mapping, the question is a located error, not a yaml-cpp one.
+  EXPECT_EQ(config_error([&] { root.child("item").child("on").has_list("x"); }),
+            "h.yaml:1:12: item.on: expected a mapping with key 'x', got a list of 1");
 }
 
 TEST(ConfigNode, ExpressionsFromConfig) {

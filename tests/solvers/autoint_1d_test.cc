@@ -156,7 +156,7 @@ equation: {integrand: "x", intervals: 0}
 domain: {lower: [-1], upper: [1]}
 equation: {integrand: "x", antiderivate: "x^2/2"}
 )yaml"),
-                       {3, 28, "equation", "unknown key 'antiderivate'"});
+                       {3, 28, "equation.antiderivate", "unknown key 'antiderivate'"});
 
   auto config = write_config("autoint", R"yaml(problem: autoint_1d
 domain: {lower: [0], upper: [2]}

@@ -164,7 +164,8 @@ TEST(AutointNerf, ConfigErrorsAreLocated) {
     testutil::expect_located_error(testutil::write_config("autoint", text), want);
   };
   check(autoint_config("{sections: 0}"), {5, 20, "render.sections", ""});
-  check(autoint_config("{sections: 8, samples: 3}"), {5, 23, "render", "unknown key 'samples'"});
+  check(autoint_config("{sections: 8, samples: 3}"),
+        {5, 23, "render.samples", "unknown key 'samples'"});
   check(autoint_config("{samples_per_section: 2.5}"), {5, 31, "render.samples_per_section", ""});
   check(autoint_config("{density: relu}"), {5, 19, "render.density", "softplus"});
   check(autoint_config("{sampler: {min_share: 1}}"), {5, 31, "render.sampler.min_share", "[0, 1)"});

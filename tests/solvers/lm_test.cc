@@ -261,13 +261,14 @@ TEST(LevenbergMarquardtConfig, RadiusOutOfRangeIsAConfigError) {
 
 TEST(LevenbergMarquardtConfig, KeysOfOtherOptimizersAreRejected) {
   expect_config_error("    - {optimizer: lm, steps: 5, lr: 1.0e-3}\n",
-                      {15, 33, "training.stages[0]", "unknown key 'lr'"});
+                      {15, 33, "training.stages[0].lr", "unknown key 'lr'"});
   expect_config_error("    - {optimizer: lm, steps: 5, memory: 10}\n",
-                      {15, 33, "training.stages[0]", "unknown key 'memory'"});
+                      {15, 33, "training.stages[0].memory", "unknown key 'memory'"});
   expect_config_error("    - {optimizer: lbfgs, steps: 5, linear_solver: dense_qr}\n",
-                      {15, 36, "training.stages[0]", "unknown key 'linear_solver'"});
+                      {15, 36, "training.stages[0].linear_solver", "unknown key 'linear_solver'"});
   expect_config_error("    - {optimizer: adam, steps: 5, resample_every: 2}\n",
-                      {15, 35, "training.stages[0]", "unknown key 'resample_every'"});
+                      {15, 35, "training.stages[0].resample_every",
+                       "unknown key 'resample_every'"});
   expect_config_error("    - {optimizer: lm, steps: 5, resample_every: -1}\n",
                       {15, 49, "training.stages[0].resample_every", "expected an integer in [0, "});
 }

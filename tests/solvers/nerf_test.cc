@@ -190,7 +190,7 @@ TEST(Nerf, ConfigErrorsAreLocated) {
   check(nerf_config(bunny_data() + "  background: green\n"), {4, 15, "data.background", "white"});
   std::string bad_render = nerf_config(bunny_data());
   bad_render.replace(bad_render.find("render: {samples: 16}"), 21, "render: {samples: 16, sample: 3}");
-  check(bad_render, {5, 23, "render", "unknown key 'sample'"});
+  check(bad_render, {5, 23, "render.sample", "unknown key 'sample'"});
   std::string flat = nerf_config(bunny_data());
   flat.replace(flat.find("upper: [0.6, 0.6, 0.6]"), 22, "upper: [0.6, -0.6, 0.6]");
   check(flat, {4, 43, "scene.upper", "upper > lower"});

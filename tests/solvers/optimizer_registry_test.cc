@@ -124,7 +124,7 @@ TEST(OptimizerRegistry, OutsideOptimizerKeysAreReadStrictly) {
       {15, 53, "training.stages[0].rate", "expected a step size > 0"});
   testutil::expect_located_error(
       write_config(poisson_config("    - {optimizer: gradient_descent, steps: 5, lr: 0.1}\n")),
-      {15, 47, "training.stages[0]", "unknown key 'lr'"});
+      {15, 47, "training.stages[0].lr", "unknown key 'lr'"});
 }
 
 TEST(OptimizerRegistry, TakenNamesAreRefused) {

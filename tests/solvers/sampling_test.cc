@@ -426,7 +426,8 @@ void expect_error(const std::string& text, const std::string& key_path, const st
 TEST(SamplingConfig, BadValuesAreConfigErrors) {
   expect_error(with(kWave, "sampler: sobol", "sampler: sobel"), "training.sampler", "uniform, sobol, halton");
   expect_error(with(kWave, "add: 10", "add: 1000"), "training.adaptive.add", "500");
-  expect_error(with(kWave, "every: 5,", "evry: 5,"), "training.adaptive", "unknown key 'evry'");
+  expect_error(with(kWave, "every: 5,", "evry: 5,"), "training.adaptive.evry",
+               "unknown key 'evry'");
   expect_error(with(kWave, "alpha: 0.3", "alpha: 0"), "training.balance.alpha", "alpha in (0, 1]");
   expect_error(with(kWave, "method: grad_norm", "method: softadapt"), "training.balance.method", "grad_norm");
   expect_error(with(kWave, "balance: {method: grad_norm, every: 3, alpha: 0.3}", "balance: gradnorm"),
