@@ -170,7 +170,7 @@ TEST(AutointNerf, ConfigErrorsAreLocated) {
   check(autoint_config("{density: relu}"), {5, 19, "render.density", "softplus"});
   check(autoint_config("{sampler: {min_share: 1}}"), {5, 31, "render.sampler.min_share", "[0, 1)"});
   check(autoint_config("{sampler: {hidden: [0]}}"), {5, 28, "render.sampler.hidden", ">= 1"});
-  check(autoint_config("{sampler: {layers: 2}}"), {5, 20, "render.sampler", "unknown key 'layers'"});
+  check(autoint_config("{sampler: {layers: 2}}"), {5, 20, "render.sampler.layers", "unknown key 'layers'"});
   check(autoint_config("{sampler: [64]}"), {5, 19, "render.sampler", "true, false or a mapping"});
   check(autoint_config("{sampler: yes please}"), {5, 19, "render.sampler", ""});
 }
