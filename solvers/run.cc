@@ -138,13 +138,15 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
     std::ofstream(p) << config_text << "\n";
   });
 
-  const auto ansatz = setup.problem->ansatz();  // hard conditions: outputs see u, not N
+  // The field as everything after training sees it, wrapped once: with hard conditions
+  // u = A + D·N, not the network N.
+  const auto ansatz = setup.problem->ansatz();
+  const StreamEvaluator solution = with_ansatz(evaluator(field), ansatz);
   const OutputContext context{dir, [&field, ansatz](const Eigen::MatrixXd& x) {
                                 Eigen::MatrixXd n = field.values(x.cast<Scalar>()).template cast<double>();
                                 return ansatz ? ansatz->values(x, n) : n;
                               },
-                              setup.output.grid, with_ansatz(evaluator(field), ansatz),
-                              std::numeric_limits<Scalar>::epsilon()};
+                              setup.output.grid, solution, std::numeric_limits<Scalar>::epsilon()};
   setup.problem->watch_field(context.values, context.streams);
   const auto started = std::chrono::steady_clock::now();
   bool finished;
@@ -173,7 +175,7 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
     callbacks.stage_error = [&] {
       if (const std::optional<double> error = setup.problem->reported_error(context)) return *error;
       return setup.problem->has_exact() && setup.problem->writes_grid_outputs()
-                 ? grid_error(*setup.problem, with_ansatz(evaluator(field), ansatz), setup.output).rel_l2
+                 ? grid_error(*setup.problem, solution, setup.output).rel_l2
                  : std::numeric_limits<double>::quiet_NaN();
     };
     callbacks.checkpoint = [&] {
@@ -187,7 +189,7 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
 
   const GridMetrics grid =
       setup.problem->writes_grid_outputs()
-          ? write_grid_outputs(*setup.problem, with_ansatz(evaluator(field), ansatz), setup.output)
+          ? write_grid_outputs(*setup.problem, solution, setup.output)
           : GridMetrics{};
   std::vector<std::pair<std::string, double>> extra;
   setup.problem->write_outputs(context, extra);
