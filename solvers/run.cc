@@ -170,6 +170,8 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
       // The other ranks only train; an error is rank 0's to compute and write.
       callbacks.stage_error = [] { return std::numeric_limits<double>::quiet_NaN(); };
       finished = trainer.run(callbacks);
+      // Wait for rank 0's outputs: mpirun ends the whole job when one rank exits with 130.
+      communicator.any(false);
       return finished ? 0 : 130;
     }
     // The problem's own progress figures, refreshed at most every 10 s (they may render).
@@ -260,6 +262,7 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
   std::printf("wrote %s (steps %ld, %.1f s", dir.string().c_str(), trainer.step(), wall);
   if (grid.has_error) std::printf(", rel_l2 %.3e, max_abs_err %.3e", grid.rel_l2, grid.max_abs_err);
   std::printf(")\n");
+  if (communicator.size() > 1) communicator.any(false);  // the other ranks wait for this
   return finished ? 0 : 130;
 }
 
