@@ -1,11 +1,12 @@
 // SPDX-License-Identifier: MIT
 //
-// Data-parallel training, run by CTest under `mpirun -np 2` (and valid with any R, 1
-// included): one step's loss and gradient summed over the ranks equal those of a single
-// process (the same trainer on a serial communicator) on the same points, to round-off,
-// for per-point terms (Poisson, in double and float) and for terms over groups (NeRF rays,
-// split between rays); every rank ends with the same bits; short Adam, L-BFGS and LM stages
-// end where one process ends. Batches are odd so that the ranks' shares differ in size.
+// Data-parallel training, run by CTest under `mpirun -np 2`: one step's loss and gradient
+// summed over the ranks equal those of a single process (the same trainer on a serial
+// communicator) on the same points, to round-off, for per-point terms (Poisson, in double
+// and float) and for terms over groups (NeRF rays, split between rays); every rank ends with
+// the same bits; short Adam, L-BFGS and LM stages end where one process ends. Batches are odd
+// so that the ranks' shares differ in size. The comparisons hold for any R; RunsOnSeveralRanks
+// asks for R >= 2 so that CTest's run cannot pass by comparing one process with itself.
 #include <gtest/gtest.h>
 
 #include <filesystem>
