@@ -6,6 +6,7 @@
 #include <CLI/CLI.hpp>
 #include <exception>
 #include <iostream>
+#include <optional>
 
 #include "apps/allocator_tuning.h"
 #include "apps/bench_command.h"
@@ -13,9 +14,27 @@
 #include "io/config.h"
 #include "io/expression.h"
 #include "io/version.h"
+#include "solvers/training/communicator.h"
+
+namespace {
+
+// Under mpirun an error on one rank would leave the others waiting in a sum: end them all.
+int failed(int code) {
+  if (nfield::solvers::world_communicator().size() > 1) nfield::solvers::abort_all_ranks(code);
+  return code;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   nfield::apps::keep_freed_blocks_in_the_heap();
+  std::optional<nfield::solvers::CommunicationScope> communication;
+  try {
+    communication.emplace(argc, argv);  // starts MPI when run by mpirun (and built with it)
+  } catch (const std::exception& e) {
+    std::cerr << "nfield: error: " << e.what() << "\n";
+    return 2;
+  }
   CLI::App app{"nfield: solve partial differential equations with neural fields"};
   app.set_version_flag("--version", std::string(nfield::version()));
   app.require_subcommand(1);
@@ -26,14 +45,18 @@ int main(int argc, char** argv) {
   } catch (const CLI::RuntimeError& e) {
     return e.get_exit_code();
   } catch (const CLI::ParseError& e) {
+    // Every rank reads the same arguments and config and fails alike: one message, and no
+    // rank is left waiting.
+    if (nfield::solvers::world_communicator().rank() != 0) return e.get_exit_code() == 0 ? 0 : 2;
     const int code = app.exit(e);
     return code == 0 ? 0 : 2;
   } catch (const nfield::io::ConfigError& e) {
-    std::cerr << "nfield: error: " << e.what() << "\n";
+    if (nfield::solvers::world_communicator().rank() == 0)
+      std::cerr << "nfield: error: " << e.what() << "\n";
     return 2;
   } catch (const std::exception& e) {
     std::cerr << "nfield: error: " << e.what() << "\n";
-    return 1;
+    return failed(1);
   }
   return 0;
 }

@@ -11,6 +11,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev libmuparser-dev libomp-dev libcli11-dev nlohmann-json3-dev
   python3-h5py python3-dev python3-numpy python3-pybind11
   libboost-dev libsndfile1-dev
+  libopenmpi-dev openmpi-bin
 )
 if [[ "${NFIELD_WITH_TORCH:-0}" == 1 ]]; then
   packages+=(python3 python3-torch python3-numpy python3-pil libopenblas0-openmp)

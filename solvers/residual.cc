@@ -48,6 +48,7 @@ double ResidualLoss<Scalar>::evaluate(Eigen::Index first, const StreamLayout& la
   out_d.points = out.points;
   out_d.count = out.count;
   out_d.data = out.data.template cast<double>();
+  first += offset_;
   residual_.evaluate(first, layout, out_d, r);
   adjoint_d.points = out.points;
   adjoint_d.count = out.count;
@@ -76,8 +77,9 @@ void to_double(const Streams<Scalar>& from, Streams<double>& to) {
 
 template <typename Scalar>
 ScaledResidual<Scalar>::ScaledResidual(const Residual& residual, double weight,
-                                       Eigen::Index total_points)
-    : residual_(residual), scale_(std::sqrt(weight / static_cast<double>(total_points))) {}
+                                       Eigen::Index total_points, Eigen::Index offset)
+    : residual_(residual), scale_(std::sqrt(weight / static_cast<double>(total_points))),
+      offset_(offset) {}
 
 template <typename Scalar>
 void ScaledResidual<Scalar>::evaluate(Eigen::Index first, const StreamLayout& layout,
@@ -86,7 +88,7 @@ void ScaledResidual<Scalar>::evaluate(Eigen::Index first, const StreamLayout& la
   thread_local Streams<double> out_d;
   thread_local Eigen::MatrixXd r_d;
   to_double(out, out_d);
-  residual_.evaluate(first, layout, out_d, r_d);
+  residual_.evaluate(first + offset_, layout, out_d, r_d);
   r = (scale_ * r_d).template cast<Scalar>();
 }
 
@@ -101,7 +103,7 @@ void ScaledResidual<Scalar>::backward(Eigen::Index first, const StreamLayout& la
   adjoint_d.count = out.count;
   adjoint_d.data.setZero(out.data.rows(), out.data.cols());
   const Eigen::MatrixXd r_bar_d = scale_ * r_bar.template cast<double>();
-  residual_.backward(first, layout, out_d, r_bar_d, adjoint_d);
+  residual_.backward(first + offset_, layout, out_d, r_bar_d, adjoint_d);
   adjoint.data += adjoint_d.data.template cast<Scalar>();
 }
 

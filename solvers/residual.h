@@ -97,13 +97,15 @@ struct LossTerm {
 // With per-point weights aₙ (one per point of the set; causal training weights time slices
 // this way) the loss is w/N Σ aₙ ‖r(xₙ)‖² and r̄ₙ = 2w aₙ rₙ / N: the aₙ are constants of
 // the pass, never differentiated.
+// A pass over part of the set (one rank's share in data-parallel training) starts at row
+// `offset` of it: the residual and the point weights are read there, N stays the whole set's.
 template <typename Scalar>
 class ResidualLoss final : public autodiff::StreamLoss<Scalar> {
  public:
   ResidualLoss(const Residual& residual, double weight, Eigen::Index total_points,
-               const Eigen::VectorXd* point_weights = nullptr)
+               const Eigen::VectorXd* point_weights = nullptr, Eigen::Index offset = 0)
       : residual_(residual), scale_(weight / static_cast<double>(total_points)),
-        point_weights_(point_weights) {}
+        point_weights_(point_weights), offset_(offset) {}
   double evaluate(Eigen::Index first, const StreamLayout& layout, const Streams<Scalar>& out,
                   Streams<Scalar>& adjoint) const override;
 
@@ -111,15 +113,18 @@ class ResidualLoss final : public autodiff::StreamLoss<Scalar> {
   const Residual& residual_;
   double scale_;
   const Eigen::VectorXd* point_weights_;  // not owned; null: all 1
+  Eigen::Index offset_;
 };
 
 // Adapts a residual on a point set to autodiff::StreamResidual, scaled by √(w/N): the
 // least-squares form of a loss term, whose squares sum to the term's loss w/N Σ‖r‖²
 // (for Levenberg–Marquardt, which wants residuals and their Jacobian rather than a loss).
+// `offset` as in ResidualLoss.
 template <typename Scalar>
 class ScaledResidual final : public autodiff::StreamResidual<Scalar> {
  public:
-  ScaledResidual(const Residual& residual, double weight, Eigen::Index total_points);
+  ScaledResidual(const Residual& residual, double weight, Eigen::Index total_points,
+                 Eigen::Index offset = 0);
   int components() const override { return residual_.components(); }
   void evaluate(Eigen::Index first, const StreamLayout& layout, const Streams<Scalar>& out,
                 autodiff::Matrix<Scalar>& r) const override;
@@ -129,6 +134,7 @@ class ScaledResidual final : public autodiff::StreamResidual<Scalar> {
  private:
   const Residual& residual_;
   double scale_;
+  Eigen::Index offset_;
 };
 
 }  // namespace nfield::solvers

@@ -119,7 +119,11 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
   const std::filesystem::path config_dir =
       std::filesystem::absolute(setup.data_dir).lexically_normal();
   fields::Field<Scalar> field(setup.field);
-  Trainer<Scalar> trainer(*setup.problem, field, setup.training);
+  // Under mpirun every rank trains (solvers/training/trainer.h); rank 0 alone prints and
+  // writes the config, checkpoints, outputs and metrics.
+  Communicator& communicator = world_communicator();
+  const bool root = communicator.rank() == 0;
+  Trainer<Scalar> trainer(*setup.problem, field, setup.training, &communicator);
   if (!resume.empty()) {
     const io::H5Reader file(resume);
     const fields::Field<Scalar> saved = fields::load_field<Scalar>(file);
@@ -131,12 +135,19 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
     field.parameters() = saved.parameters();
     trainer.load_state(file);
     setup.problem->load_state(file);
-    std::printf("resuming from %s at step %ld\n", resume.string().c_str(), trainer.step());
+    if (root)
+      std::printf("resuming from %s at step %ld\n", resume.string().c_str(), trainer.step());
   }
-  std::filesystem::create_directories(dir);
-  io::write_atomically(dir / "config.yaml", [&](const std::filesystem::path& p) {
-    std::ofstream(p) << config_text << "\n";
-  });
+  const long first_step = trainer.step();
+  if (root) {
+    std::filesystem::create_directories(dir);
+    io::write_atomically(dir / "config.yaml", [&](const std::filesystem::path& p) {
+      std::ofstream(p) << config_text << "\n";
+    });
+    if (communicator.size() > 1)
+      std::printf("training over %d MPI ranks, each step's points split between them\n",
+                  communicator.size());
+  }
 
   // The field as everything after training sees it, wrapped once: with hard conditions
   // u = A + D·N, not the network N.
@@ -157,6 +168,14 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
     ProgressPrinter printer(printing);
     typename Trainer<Scalar>::Callbacks callbacks;
     callbacks.stop_requested = [] { return g_signal.load() != 0; };
+    if (!root) {
+      // The other ranks only train; an error is rank 0's to compute and write.
+      callbacks.stage_error = [] { return std::numeric_limits<double>::quiet_NaN(); };
+      finished = trainer.run(callbacks);
+      // Wait for rank 0's outputs: mpirun ends the whole job when one rank exits with 130.
+      communicator.any(false);
+      return finished ? 0 : 130;
+    }
     // The problem's own progress figures, refreshed at most every 10 s (they may render).
     std::vector<std::pair<std::string, double>> problem_figures;
     auto figured = std::chrono::steady_clock::now();
@@ -228,6 +247,14 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
     metrics["max_abs_err"] = grid.max_abs_err;
   }
   if (setup.problem->writes_grid_outputs()) metrics["residual_rms"] = grid.residual_rms;
+  if (communicator.size() > 1) {
+    metrics["mpi_ranks"] = communicator.size();
+    // Sent by this rank into the step's sums (and stop flags, clock): the volume per step.
+    const long steps = trainer.step() - first_step;
+    if (steps > 0)
+      metrics["mpi_bytes_per_step"] =
+          static_cast<double>(communicator.bytes_communicated()) / static_cast<double>(steps);
+  }
   for (const auto& [key, value] : trainer.extra_metrics()) metrics[key] = value;
   for (const auto& [key, value] : extra) metrics[key] = value;
   metrics["nfield_version"] = std::string(version());
@@ -237,6 +264,7 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
   std::printf("wrote %s (steps %ld, %.1f s", dir.string().c_str(), trainer.step(), wall);
   if (grid.has_error) std::printf(", rel_l2 %.3e, max_abs_err %.3e", grid.rel_l2, grid.max_abs_err);
   std::printf(")\n");
+  if (communicator.size() > 1) communicator.any(false);  // the other ranks wait for this
   return finished ? 0 : 130;
 }
 

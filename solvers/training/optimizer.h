@@ -28,6 +28,7 @@
 #include "io/config.h"
 #include "io/hdf5_file.h"
 #include "solvers/residual.h"
+#include "solvers/training/communicator.h"
 
 namespace nfield::solvers {
 
@@ -81,7 +82,11 @@ class TrainingStage {
   // joined to the stage's own points.
   void renew_points(int resample_every);
 
-  // Wall seconds since the stage (or its resumed part) began.
+  // The ranks the trainer splits each step over (solvers/training/trainer.h); one for a
+  // single process.
+  Communicator& communicator() const;
+
+  // Wall seconds since the stage (or its resumed part) began (rank 0's, on every rank).
   double seconds() const;
   // A wall-time budget of the stage, for the ETA of progress lines (0: none).
   void set_time_budget(double seconds);

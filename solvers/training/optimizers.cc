@@ -78,15 +78,19 @@ class StepCallback final : public ceres::IterationCallback {
 
 // One loss term as a Ceres cost function: N·C residuals √(w/N)·r (point-major) over the
 // single parameter block θ. Ceres evaluates it from one thread (num_threads = 1); the
-// Jacobian pass runs in parallel inside.
+// Jacobian pass runs in parallel inside. Over R ranks each computes the rows of its share of
+// the points and gathers the others' (every rank's Ceres then solves the same whole
+// problem, so all take the same step): the network passes split, the dense solve does not.
 template <typename Scalar>
 class TermCost final : public ceres::CostFunction {
  public:
   TermCost(const fields::Field<Scalar>& network, const autodiff::StreamLayout& layout,
-           const autodiff::Matrix<Scalar>& points,
-           std::unique_ptr<autodiff::StreamResidual<Scalar>> residual)
-      : network_(network), layout_(layout), points_(points), residual_(std::move(residual)) {
-    this->set_num_residuals(static_cast<int>(points.rows() * residual_->components()));
+           const autodiff::Matrix<Scalar>& points, const Residual& residual, double weight,
+           Communicator& communicator)
+      : network_(network), layout_(layout), points_(points), communicator_(communicator),
+        share_(share_of(points.rows(), communicator.rank(), communicator.size())),
+        residual_(residual, weight, points.rows(), share_.first) {
+    this->set_num_residuals(static_cast<int>(points.rows() * residual_.components()));
     this->mutable_parameter_block_sizes()->push_back(static_cast<int>(network.parameter_count()));
   }
 
@@ -94,17 +98,20 @@ class TermCost final : public ceres::CostFunction {
                 double** jacobians) const override {
     const Eigen::Index m = this->num_residuals(), p = network_.parameter_count();
     double* jacobian = jacobians ? jacobians[0] : nullptr;
-    if constexpr (std::is_same_v<Scalar, double>) {
-      network_.residuals_and_jacobian(parameters[0], layout_, autodiff::Batch<Scalar>{points_}, *residual_, residuals,
-                                      jacobian);
+    if (communicator_.size() == 1) {
+      evaluate_rows(parameters[0], residuals, jacobian);
     } else {
-      theta_ = Eigen::Map<const Eigen::VectorXd>(parameters[0], p).cast<Scalar>();
-      r_.resize(m);
-      if (jacobian) j_.resize(m * p);
-      network_.residuals_and_jacobian(theta_.data(), layout_, autodiff::Batch<Scalar>{points_}, *residual_, r_.data(),
-                                      jacobian ? j_.data() : nullptr);
-      Eigen::Map<Eigen::VectorXd>(residuals, m) = r_.template cast<double>();
-      if (jacobian) Eigen::Map<Eigen::VectorXd>(jacobian, m * p) = j_.template cast<double>();
+      const std::size_t c = residual_.components();
+      std::vector<std::size_t> rows(communicator_.size()), entries(communicator_.size());
+      for (int r = 0; r < communicator_.size(); ++r) {
+        rows[r] = c * share_of(points_.rows(), r, communicator_.size()).count;
+        entries[r] = rows[r] * static_cast<std::size_t>(p);
+      }
+      mine_r_.resize(static_cast<Eigen::Index>(rows[communicator_.rank()]));
+      if (jacobian) mine_j_.resize(static_cast<Eigen::Index>(entries[communicator_.rank()]));
+      evaluate_rows(parameters[0], mine_r_.data(), jacobian ? mine_j_.data() : nullptr);
+      communicator_.allgather(mine_r_.data(), rows, residuals);
+      if (jacobian) communicator_.allgather(mine_j_.data(), entries, jacobian);
     }
     const Eigen::Map<const Eigen::VectorXd> r(residuals, m);
     if (!r.allFinite()) return false;
@@ -126,11 +133,32 @@ class TermCost final : public ceres::CostFunction {
   }
 
  private:
+  // The residuals and Jacobian rows of this rank's points (all of them with one rank).
+  void evaluate_rows(const double* theta, double* residuals, double* jacobian) const {
+    if (share_.count == 0) return;
+    const Eigen::Index m = share_.count * residual_.components(), p = network_.parameter_count();
+    const autodiff::Batch<Scalar> batch{points_.middleRows(share_.first, share_.count)};
+    if constexpr (std::is_same_v<Scalar, double>) {
+      network_.residuals_and_jacobian(theta, layout_, batch, residual_, residuals, jacobian);
+    } else {
+      theta_ = Eigen::Map<const Eigen::VectorXd>(theta, p).cast<Scalar>();
+      r_.resize(m);
+      if (jacobian) j_.resize(m * p);
+      network_.residuals_and_jacobian(theta_.data(), layout_, batch, residual_, r_.data(),
+                                      jacobian ? j_.data() : nullptr);
+      Eigen::Map<Eigen::VectorXd>(residuals, m) = r_.template cast<double>();
+      if (jacobian) Eigen::Map<Eigen::VectorXd>(jacobian, m * p) = j_.template cast<double>();
+    }
+  }
+
   const fields::Field<Scalar>& network_;
   const autodiff::StreamLayout& layout_;
   const autodiff::Matrix<Scalar>& points_;
-  std::unique_ptr<autodiff::StreamResidual<Scalar>> residual_;
+  Communicator& communicator_;
+  Share share_;
+  ScaledResidual<Scalar> residual_;
   mutable autodiff::Vector<Scalar> theta_, r_, j_;
+  mutable Eigen::VectorXd mine_r_, mine_j_;
   mutable double loss_at_iterate_ = NAN;
 };
 
@@ -383,12 +411,12 @@ class LmOptimizer final : public OptimizerOf<LmOptimizer, LmStageOptions> {
         throw std::runtime_error(name + "its Jacobian would be " + too_large);
       costs.clear();
       for (size_t k = 0; k < stage.term_count(); ++k)
-        costs.push_back(std::make_unique<TermCost<Scalar>>(
-            field, stage.layout(k), stage.points_in_scalar(k),
-            // λ of training.balance is held fixed here, as in L-BFGS; causal weights are not
-            // applied in this stage (its residuals are the plain ones).
-            std::make_unique<ScaledResidual<Scalar>>(stage.residual(k), stage.weight(k),
-                                                     stage.points(k).x.rows())));
+        // λ of training.balance is held fixed here, as in L-BFGS; causal weights are not
+        // applied in this stage (its residuals are the plain ones).
+        costs.push_back(std::make_unique<TermCost<Scalar>>(field, stage.layout(k),
+                                                           stage.points_in_scalar(k),
+                                                           stage.residual(k), stage.weight(k),
+                                                           stage.communicator()));
       ceres::Problem::Options problem_options;
       problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
       ceres::Problem problem(problem_options);

@@ -21,8 +21,10 @@ double now_seconds() {
 
 template <typename Scalar>
 Trainer<Scalar>::Trainer(const Problem& problem, fields::Field<Scalar>& field,
-                         TrainingOptions options)
-    : problem_(problem), field_(field), options_(std::move(options)), rng_(options_.seed) {
+                         TrainingOptions options, Communicator* communicator)
+    : problem_(problem), field_(field),
+      communicator_(communicator ? *communicator : world_communicator()),
+      options_(std::move(options)), rng_(options_.seed) {
   terms_ = with_ansatz(problem_.loss_terms(), problem_.ansatz());  // hard conditions: u = A + D·N
   for (const LossTerm& term : terms_) {
     names_.push_back(term.name);
@@ -80,22 +82,58 @@ template <typename Scalar>
 double Trainer<Scalar>::term_loss(size_t k, const Scalar* params, double weight, Scalar* gradient) {
   const bool causal = options_.causal.enabled && static_cast<int>(k) == pde_ &&
                       causal_.point_weights.size() == points_[k].x.rows();
-  const ResidualLoss<Scalar> loss(*residuals_[k], weight, points_[k].residual_rows(),
-                                  causal ? &causal_.point_weights : nullptr);
-  const autodiff::Batch<Scalar> batch{points_scalar_[k],
-                                      tangents_scalar_[k].size() > 0 ? &tangents_scalar_[k] : nullptr,
-                                      points_[k].groups};
+  const TermPoints& points = points_[k];
+  const Eigen::VectorXd* point_weights = causal ? &causal_.point_weights : nullptr;
+  const bool tangents = tangents_scalar_[k].size() > 0;
+  if (!parallel()) {
+    const ResidualLoss<Scalar> loss(*residuals_[k], weight, points.residual_rows(), point_weights);
+    const autodiff::Batch<Scalar> batch{points_scalar_[k],
+                                        tangents ? &tangents_scalar_[k] : nullptr, points.groups};
+    return field_.value_and_gradient(params, layouts_[k], batch, loss, gradient);
+  }
+  // This rank's residual rows, and the points they read: rows [first, first + count) of x.
+  const Share share = share_of(points.residual_rows(), communicator_.rank(), communicator_.size());
+  if (share.count == 0) return 0;
+  Eigen::Index first = share.first, count = share.count;
+  std::vector<Eigen::Index> groups;
+  if (!points.groups.empty()) {
+    first = points.groups[share.first];
+    count = points.groups[share.first + share.count] - first;
+    groups.assign(points.groups.begin() + share.first,
+                  points.groups.begin() + share.first + share.count + 1);
+    for (Eigen::Index& g : groups) g -= first;
+  }
+  const ResidualLoss<Scalar> loss(*residuals_[k], weight, points.residual_rows(), point_weights,
+                                  first);
+  autodiff::Matrix<Scalar> share_tangents;
+  if (tangents) share_tangents = tangents_scalar_[k].middleRows(first, count);
+  const autodiff::Batch<Scalar> batch{points_scalar_[k].middleRows(first, count),
+                                      tangents ? &share_tangents : nullptr, groups};
   return field_.value_and_gradient(params, layouts_[k], batch, loss, gradient);
+}
+
+template <typename Scalar>
+void Trainer<Scalar>::sum_over_ranks(Scalar* gradient) {
+  if (!parallel()) return;
+  communicator_.allreduce_sum(gradient, static_cast<std::size_t>(field_.parameter_count()));
+  communicator_.allreduce_sum(losses_.data(), losses_.size());
+}
+
+template <typename Scalar>
+double Trainer<Scalar>::loss_and_gradient_at(const Scalar* params, Scalar* gradient) {
+  if (std::any_of(residuals_.begin(), residuals_.end(), [](const auto& r) { return r == nullptr; }))
+    resample();
+  return loss_and_gradient(params, gradient);
 }
 
 template <typename Scalar>
 double Trainer<Scalar>::loss_and_gradient(const Scalar* params, Scalar* gradient) {
   Eigen::Map<autodiff::Vector<Scalar>>(gradient, field_.parameter_count()).setZero();
-  double total = 0;
-  for (size_t k = 0; k < terms_.size(); ++k) {
+  for (size_t k = 0; k < terms_.size(); ++k)
     losses_[k] = term_loss(k, params, terms_[k].weight * balance_[k], gradient);
-    total += losses_[k];
-  }
+  sum_over_ranks(gradient);
+  double total = 0;
+  for (double loss : losses_) total += loss;
   return total;
 }
 
@@ -106,7 +144,9 @@ void Trainer<Scalar>::balanced_gradient(Scalar* gradient) {
   for (size_t k = 0; k < terms_.size(); ++k) {
     g[k] = autodiff::Vector<Scalar>::Zero(n);
     losses_[k] = term_loss(k, field_.parameters().data(), terms_[k].weight, g[k].data());
+    if (parallel()) communicator_.allreduce_sum(g[k].data(), static_cast<std::size_t>(n));
   }
+  if (parallel()) communicator_.allreduce_sum(losses_.data(), losses_.size());
   const Eigen::VectorXd pde = g[pde_].template cast<double>();
   const double alpha = options_.balance.alpha;
   Eigen::Map<autodiff::Vector<Scalar>> sum(gradient, n);
@@ -266,6 +306,10 @@ void Trainer<Scalar>::finish_step(double learning_rate, double milliseconds) {
 
 template <typename Scalar>
 bool Trainer<Scalar>::run(const Callbacks& callbacks) {
+  // Every rank built or loaded the same parameters; rank 0's make sure of it.
+  if (parallel())
+    communicator_.broadcast(field_.parameters().data(),
+                            static_cast<std::size_t>(field_.parameter_count()));
   for (; stage_ < static_cast<int>(options_.stages.size()); ++stage_) {
     const StageOptions& stage = options_.stages[stage_];
     const double stage_started = stage_started_ = now_seconds();
@@ -295,6 +339,9 @@ void Trainer<Scalar>::save_state(io::H5Writer& file) const {
   file.write_attribute("trainer", "stage", static_cast<std::int64_t>(stage_));
   file.write_attribute("trainer", "stage_step", static_cast<std::int64_t>(stage_step_));
   file.write_attribute("trainer", "global_step", static_cast<std::int64_t>(global_step_));
+  // Absent: one process (checkpoints of serial runs stay as they were).
+  if (parallel())
+    file.write_attribute("trainer", "mpi_ranks", static_cast<std::int64_t>(communicator_.size()));
   std::ostringstream engine;
   engine << rng_;
   file.write_attribute("trainer", "random_engine", engine.str());
@@ -320,6 +367,17 @@ void Trainer<Scalar>::save_state(io::H5Writer& file) const {
 
 template <typename Scalar>
 void Trainer<Scalar>::load_state(const io::H5Reader& file) {
+  const std::int64_t ranks = file.has_attribute("trainer", "mpi_ranks")
+                                 ? file.read_attribute<std::int64_t>("trainer", "mpi_ranks")
+                                 : 1;
+  if (ranks != communicator_.size())
+    throw std::runtime_error(
+        file.path().string() + ": written by a run over " + std::to_string(ranks) + " MPI rank" +
+        (ranks == 1 ? "" : "s") + ", resumed over " + std::to_string(communicator_.size()) +
+        "; resume it with the same number (" +
+        (ranks == 1 ? std::string("without mpirun, or mpirun -np 1")
+                    : "mpirun -np " + std::to_string(ranks)) +
+        "): how a step's sums split over ranks decides the bits of the run");
   stage_ = static_cast<int>(file.read_attribute<std::int64_t>("trainer", "stage"));
   stage_step_ = static_cast<int>(file.read_attribute<std::int64_t>("trainer", "stage_step"));
   global_step_ = file.read_attribute<std::int64_t>("trainer", "global_step");
@@ -435,13 +493,22 @@ bool TrainingStage<Scalar>::ends_after_segment(int segment, int segment_start, b
 template <typename Scalar>
 void TrainingStage<Scalar>::renew_points(int resample_every) { trainer_.renew_points(resample_every); }
 template <typename Scalar>
-double TrainingStage<Scalar>::seconds() const { return now_seconds() - trainer_.stage_started_; }
+double TrainingStage<Scalar>::seconds() const {
+  double seconds = now_seconds() - trainer_.stage_started_;
+  // Rank 0's clock for all: a learning rate or the end of a time budget must not differ.
+  if (trainer_.parallel()) trainer_.communicator_.broadcast(&seconds, 1);
+  return seconds;
+}
+template <typename Scalar>
+Communicator& TrainingStage<Scalar>::communicator() const { return trainer_.communicator_; }
 template <typename Scalar>
 void TrainingStage<Scalar>::set_time_budget(double seconds) { trainer_.time_budget_ = seconds; }
 template <typename Scalar>
 bool TrainingStage<Scalar>::stop_requested() const {
   const auto& stop = trainer_.callbacks_->stop_requested;
-  return stop && stop();
+  const bool requested = stop && stop();
+  // One rank's request stops them all, at the same step.
+  return trainer_.parallel() ? trainer_.communicator_.any(requested) : requested;
 }
 template <typename Scalar>
 void TrainingStage<Scalar>::finish_step(double learning_rate, double milliseconds) {

@@ -20,6 +20,20 @@
 // computes the causal slice weights at the current parameters; every balance.every Adam steps
 // the terms' gradients are taken one by one to update λ. Their state (sequence counts, extra
 // set, λ) is part of save_state, so resumed runs still match uninterrupted ones.
+//
+// Data parallelism (solvers/training/communicator.h): with a communicator of R > 1 ranks,
+// every rank runs this same trainer on the same points (drawn from the same seeded stream,
+// so no per-rank streams are needed); each loss term's passes run over the rank's contiguous
+// share of the term's residual rows (points, or groups of points), scaled by the whole
+// batch's N, and the term losses and the gradient are summed over the ranks before the
+// optimizer sees them: Adam's step, L-BFGS' line search and LM's Jacobian (its rows gathered
+// from the ranks) are the same on every rank, and so are the parameters after it. What reads
+// the clock or a signal (time budgets, stop requests) is decided on rank 0 or on any rank
+// for all. Every rank repeats the drawing of points (and what a problem updates as it
+// draws, such as AutoInt's sampling network), refinement and causal weights on the whole
+// set: same inputs, same thread count, same bits. A checkpoint of an R-rank run records R,
+// and load_state refuses another R: the order of the sums, and so the bits of the run,
+// depend on it. R = 1 (and a build without MPI) runs as before.
 #pragma once
 
 #include <functional>
@@ -29,6 +43,7 @@
 
 #include "fields/field.h"
 #include "io/hdf5_file.h"
+#include "solvers/training/communicator.h"
 #include "solvers/training/loss_balancing.h"
 #include "solvers/training/optimizer.h"
 #include "solvers/problem.h"
@@ -65,8 +80,16 @@ class Trainer {
     std::function<double()> stage_error;
   };
 
-  Trainer(const Problem& problem, fields::Field<Scalar>& field, TrainingOptions options);
+  // `communicator` (not owned; null: world_communicator()) splits each step over its ranks.
+  Trainer(const Problem& problem, fields::Field<Scalar>& field, TrainingOptions options,
+          Communicator* communicator = nullptr);
   ~Trainer();
+
+  // The training loss Σ_k w_k/N_k Σ‖r‖² at `params` and its gradient (overwritten), on the
+  // current points (drawn first when there are none yet), summed over the ranks: one step's
+  // loss and gradient, for checks of the data-parallel split.
+  double loss_and_gradient_at(const Scalar* params, Scalar* gradient);
+  Communicator& communicator() const { return communicator_; }
 
   // Runs the remaining stages. Returns false when stopped by stop_requested.
   bool run(const Callbacks& callbacks);
@@ -97,7 +120,11 @@ class Trainer {
 
   void resample();
   double loss_and_gradient(const Scalar* params, Scalar* gradient);
+  // This rank's part of term k's loss (the whole of it with one rank).
   double term_loss(size_t k, const Scalar* params, double weight, Scalar* gradient);
+  // Sums the term losses and `gradient` over the ranks.
+  void sum_over_ranks(Scalar* gradient);
+  bool parallel() const { return communicator_.size() > 1; }
   Eigen::VectorXd squared_residuals(size_t k, const Eigen::MatrixXd& x, const Residual& r) const;
   void refine();
   // Tells the field and the terms that stage_ starts and rebuilds the residuals of the terms
@@ -117,6 +144,7 @@ class Trainer {
 
   const Problem& problem_;
   fields::Field<Scalar>& field_;
+  Communicator& communicator_;
   TrainingOptions options_;
   std::vector<LossTerm> terms_;
   std::vector<std::string> names_;
