@@ -18,6 +18,7 @@
 //       lr: 1.0e-3
 //       min_share: 0.25         #   each section ≥ min_share/K of the ray
 //       every: 1                #   steps between the network's updates
+//       rays: 256               #   rays of the batch each update reads
 //   field: {type: nerf, activation: tanh, encoding: {type: positional, normalize: true}}
 //   training:
 //     batch: {rays: 1024}
@@ -48,7 +49,7 @@
 // Sampling network (`render.sampler`). The sections are those a small network places per
 // ray (section_sampler.h) instead of equal ones, in training and rendering alike. Before
 // each batch's step of the field, the network takes one Adam step on the rendering loss of
-// that batch's rays at its own sections, with Φ fixed; the field's step then trains at the
+// (some of) that batch's rays at its own sections, with Φ fixed; the field's step then trains at the
 // stratified samples of the sections it now places. Its weights and Adam state are saved in
 // the checkpoint (group `sampler`), so resume and `nfield render` use the same sections. A
 // ray then costs one evaluation of the sampling network besides the K + 1 of Φ.

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "solvers/problems/section_sampler.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -43,6 +44,7 @@ void SectionSamplerOptions::validate() const {
   if (!(min_share >= 0 && min_share < 1))
     throw std::invalid_argument(rule("min_share", std::to_string(min_share), "must be in [0, 1)"));
   if (every < 1) throw std::invalid_argument(rule("every", std::to_string(every), "must be >= 1"));
+  if (rays < 1) throw std::invalid_argument(rule("rays", std::to_string(rays), "must be >= 1"));
 }
 
 SectionSamplerOptions SectionSamplerOptions::from_config(const io::ConfigNode& node) {
@@ -58,6 +60,7 @@ SectionSamplerOptions SectionSamplerOptions::from_config(const io::ConfigNode& n
   o.min_share = node.get_or("min_share", o.min_share);
   node.require("min_share", o.min_share >= 0 && o.min_share < 1, "expected a number in [0, 1)");
   if (node.has("every")) o.every = node.get_in_range("every", 1, 1000000);
+  if (node.has("rays")) o.rays = node.get_in_range("rays", 1, 1 << 24);
   if (node.has("seed")) o.seed = static_cast<std::uint64_t>(node.get_in_range("seed", 0, 1 << 30));
   node.reject_unknown_keys();
   return o;
@@ -159,6 +162,16 @@ SamplerUpdate SectionSampler::update(const integrators::Rays<double>& rays, cons
                                      const Eigen::MatrixXd& background, const FieldStreams& field,
                                      const DensityActivation& density, double density_scale) {
   Eigen::VectorXd gradient;
+  const Eigen::Index n = std::min<Eigen::Index>(rays.size(), options_.rays);
+  if (n < rays.size()) {
+    const integrators::Rays<double> first{rays.origins.topRows(n), rays.directions.topRows(n),
+                                          rays.depth_scale.head(n), rays.near.head(n), rays.far.head(n)};
+    const Eigen::MatrixXd first_background = background.rows() == 1 ? background : background.topRows(n);
+    const SamplerUpdate result = loss_and_gradient(first, target.topRows(n), first_background, field, density,
+                                                   density_scale, gradient);
+    if (gradient.size() > 0) adam_.step(network_.parameters().data(), gradient.data());
+    return result;
+  }
   const SamplerUpdate result = loss_and_gradient(rays, target, background, field, density, density_scale, gradient);
   if (gradient.size() > 0) adam_.step(network_.parameters().data(), gradient.data());
   return result;

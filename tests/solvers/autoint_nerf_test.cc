@@ -352,6 +352,25 @@ TEST(SectionSampler, LearnsToEncloseAThinSlab) {
   EXPECT_LT(tightest, 0.22) << "the slab is 0.2 long, equal sections 0.3";
 }
 
+TEST(SectionSampler, AnUpdateReadsTheFirstRaysOfTheBatchOnly) {
+  const fields::Field<double> field = random_integral_field();
+  std::mt19937_64 engine(5);
+  const integrators::Rays<double> rays = random_rays(12, engine);
+  Eigen::MatrixXd target = Eigen::MatrixXd::Constant(12, 3, 0.5);
+  const Eigen::MatrixXd background = Eigen::RowVector3d(1, 1, 1);
+  SectionSamplerOptions options;
+  options.rays = 6;
+  SectionSampler a(4, options), b(4, options);
+  const SamplerUpdate first = a.update(rays, target, background, streams_of(field), {}, 10);
+  target.bottomRows(6).setZero();  // pixels of rays the update does not read
+  const SamplerUpdate second = b.update(rays, target, background, streams_of(field), {}, 10);
+  EXPECT_EQ(first.loss, second.loss);
+  EXPECT_EQ(a.parameters(), b.parameters());
+  target.row(0).setZero();  // a pixel it reads
+  SectionSampler c(4, options);
+  EXPECT_NE(c.update(rays, target, background, streams_of(field), {}, 10).loss, first.loss);
+}
+
 TEST(SectionSampler, IsSavedAndLoadedWithItsAdamState) {
   const fields::Field<double> field = random_integral_field();
   std::mt19937_64 engine(4);
