@@ -161,19 +161,14 @@ Eigen::MatrixXd SectionSampler::end_points(const integrators::Rays<double>& rays
 SamplerUpdate SectionSampler::update(const integrators::Rays<double>& rays, const Eigen::MatrixXd& target,
                                      const Eigen::MatrixXd& background, const FieldStreams& field,
                                      const DensityActivation& density, double density_scale) {
-  Eigen::VectorXd gradient;
   const Eigen::Index n = std::min<Eigen::Index>(rays.size(), options_.rays);
-  if (n < rays.size()) {
-    const integrators::Rays<double> first{rays.origins.topRows(n), rays.directions.topRows(n),
-                                          rays.depth_scale.head(n), rays.near.head(n), rays.far.head(n)};
-    const Eigen::MatrixXd first_background = background.rows() == 1 ? background : background.topRows(n);
-    const SamplerUpdate result = loss_and_gradient(first, target.topRows(n), first_background, field, density,
-                                                   density_scale, gradient);
-    if (gradient.size() > 0) adam_.step(network_.parameters().data(), gradient.data());
-    return result;
-  }
-  const SamplerUpdate result = loss_and_gradient(rays, target, background, field, density, density_scale, gradient);
-  if (gradient.size() > 0) adam_.step(network_.parameters().data(), gradient.data());
+  const integrators::Rays<double> read{rays.origins.topRows(n), rays.directions.topRows(n),
+                                       rays.depth_scale.head(n), rays.near.head(n), rays.far.head(n)};
+  const Eigen::MatrixXd read_background = background.rows() == 1 ? background : background.topRows(n);
+  Eigen::VectorXd gradient;
+  const SamplerUpdate result =
+      loss_and_gradient(read, target.topRows(n), read_background, field, density, density_scale, gradient);
+  adam_.step(network_.parameters().data(), gradient.data());
   return result;
 }
 
