@@ -43,7 +43,9 @@
 // write_outputs (after training), in the cloud's original coordinates:
 //   surface.vtp, surface.ply   the zero level set of u on output.grid (flying edges), with
 //                              outward normals in the .vtp;
-//   metrics   surface_vertices, surface_triangles, and with reference_mesh:
+//   metrics   surface_vertices, surface_triangles, surface_components (connected pieces of the
+//             zero level set) and surface_largest_component_area_share (io/surface_components.h),
+//             and with reference_mesh:
 //             chamfer_surface_to_mesh, chamfer_mesh_to_surface (mean distances of the vertices
 //             of one surface to the other), chamfer_mean (their mean: the symmetric Chamfer
 //             distance), chamfer_max (the largest of all those distances, a Hausdorff estimate),
@@ -67,6 +69,7 @@
 #include "io/grid.h"
 #include "io/isosurface.h"
 #include "io/mesh_distance.h"
+#include "io/surface_components.h"
 #include "io/point_cloud.h"
 #include "io/triangle_mesh.h"
 #include "io/vtk_polydata.h"
@@ -264,6 +267,9 @@ class Sdf final : public Problem {
     io::write_ply(context.dir / "surface.ply", surface);
     metrics.emplace_back("surface_vertices", static_cast<double>(surface.vertices.rows()));
     metrics.emplace_back("surface_triangles", static_cast<double>(surface.triangles.rows()));
+    const io::SurfaceComponents pieces = io::surface_components(surface);
+    metrics.emplace_back("surface_components", pieces.count);
+    metrics.emplace_back("surface_largest_component_area_share", pieces.largest_area_share);
     if (!reference_) return;
 
     const double nan = std::numeric_limits<double>::quiet_NaN();

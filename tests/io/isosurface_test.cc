@@ -9,6 +9,7 @@
 #include <Eigen/Geometry>
 
 #include "io/mesh_distance.h"
+#include "io/surface_components.h"
 #include "tests/io/io_test_paths.h"
 
 namespace nfield::io {
@@ -46,6 +47,34 @@ TEST(Isosurface, SphereOfASignedDistance) {
   const ChamferDistance chamfer = chamfer_distance(mesh, sphere);
   EXPECT_LT(chamfer.mean(), 0.01);
   EXPECT_EQ(chamfer.a_to_b, d.mean());
+}
+
+// Two balls of radii 0.5 and 0.25, apart: two pieces, the larger with 0.5²/(0.5² + 0.25²) =
+// 0.8 of the area (to the marching-cubes error), each triangle labelled with its ball.
+TEST(Isosurface, ComponentsOfTwoBalls) {
+  const Grid grid = make_grid({-1, -1, -1}, {1, 1, 1}, {64, 64, 64});
+  const Eigen::MatrixXd x = grid.points(3);
+  const Eigen::Vector3d big(-0.4, 0, 0), small(0.6, 0, 0);
+  Eigen::VectorXd sdf(x.rows());
+  for (Eigen::Index p = 0; p < x.rows(); ++p) {
+    const Eigen::Vector3d q = x.row(p).transpose();
+    sdf(p) = std::min((q - big).norm() - 0.5, (q - small).norm() - 0.25);
+  }
+  const TriangleMesh both = extract_isosurface(grid, sdf);
+  const SurfaceComponents pieces = surface_components(both);
+  EXPECT_EQ(pieces.count, 2);
+  EXPECT_NEAR(pieces.largest_area_share, 0.8, 0.01);
+  EXPECT_NEAR(pieces.area, 4 * std::numbers::pi * (0.25 + 0.0625), 0.02);
+  for (Eigen::Index t = 0; t < both.triangles.rows(); ++t) {
+    const bool on_big = both.vertices(both.triangles(t, 0), 0) < 0.1;
+    ASSERT_EQ(pieces.piece(t), on_big ? 0 : 1) << t;
+  }
+  // One ball: one piece holding everything; no triangles: none.
+  for (Eigen::Index p = 0; p < x.rows(); ++p) sdf(p) = (x.row(p).transpose() - big).norm() - 0.5;
+  const SurfaceComponents one = surface_components(extract_isosurface(grid, sdf));
+  EXPECT_EQ(one.count, 1);
+  EXPECT_DOUBLE_EQ(one.largest_area_share, 1.0);
+  EXPECT_EQ(surface_components(TriangleMesh{}).count, 0);
 }
 
 TEST(Isosurface, NoCrossingGivesAnEmptyMesh) {

@@ -256,6 +256,9 @@ output: {grid: [40, 40, 40], png: false}
   EXPECT_GT(metrics["sign_accuracy"].get<double>(), 0.995);
   EXPECT_GT(metrics["sign_accuracy_band"].get<double>(), 0.98);
   EXPECT_EQ(metrics["surface_triangles"].get<double>(), static_cast<double>(surface.triangles.rows()));
+  // A sphere's level set is one piece.
+  EXPECT_EQ(metrics["surface_components"].get<double>(), 1.0);
+  EXPECT_DOUBLE_EQ(metrics["surface_largest_component_area_share"].get<double>(), 1.0);
   std::filesystem::remove_all(out);
 }
 
