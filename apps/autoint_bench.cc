@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "io/atomic_write.h"
+#include "io/config.h"
 #include "solvers/run.h"
 
 namespace nfield::apps {
@@ -55,19 +56,19 @@ int run_autoint_bench(const AutointBenchOptions& options) {
   std::vector<bool> samplers;
   if (options.sampler != "on") samplers.push_back(false);
   if (options.sampler != "off") samplers.push_back(true);
+  // Whether the config itself places sections by the network (`sampler:` a mapping or true):
+  // runs that differ get `render.sampler=true|false`, the others keep the config's section.
+  const io::ConfigNode render = io::load_config(options.autoint_config, common).child_or_empty("render");
+  const bool configured =
+      render.has("sampler") && !(render.yaml()["sampler"].IsScalar() && !render.get<bool>("sampler"));
   for (bool sampler : samplers)
     for (int k : options.sections) {
       const long per_section = std::max(1L, std::lround(static_cast<double>(options.samples_per_ray) / k));
       std::vector<std::string> set{"render.sections=" + std::to_string(k),
                                    "render.samples_per_section=" + std::to_string(per_section)};
-      // The config's own sampler section if it has one, else the defaults; or none.
+      if (sampler != configured) set.push_back(std::string("render.sampler=") + (sampler ? "true" : "false"));
       const std::string name = "autoint_" + std::to_string(k) + (sampler ? "_sampler" : "");
       solvers::RunSetup setup = solvers::load_run(options.autoint_config, with(set), options.out / name);
-      const io::ConfigNode render = setup.root.child_or_empty("render");
-      const bool configured =
-          render.has("sampler") && !(render.yaml()["sampler"].IsScalar() && !render.get<bool>("sampler"));
-      if (sampler != configured) set.push_back(std::string("render.sampler=") + (sampler ? "true" : "false"));
-      if (sampler != configured) setup = solvers::load_run(options.autoint_config, with(set), options.out / name);
       runs.push_back({name, k, k + 1, sampler, std::move(setup), {}});
     }
   for (size_t r = 0; r < runs.size(); ++r) {

@@ -264,6 +264,9 @@ PYBIND11_MODULE(nfield, m) {
   py::register_exception<io::H5Error>(m, "H5Error", PyExc_OSError);
 
   // The lambdas return py::object: an item accessor of the temporary dict would outlive it.
+  const auto values = [](const CheckpointField& f, const py::handle& x) -> py::object {
+    return f.streams(x, StreamSpec::values(f.input_dim()))["value"];
+  };
   py::class_<CheckpointField>(m, "Field", "The field of a checkpoint, evaluated in double.")
       .def_property_readonly("input_dim", &CheckpointField::input_dim)
       .def_property_readonly("output_dim", &CheckpointField::output_dim)
@@ -274,18 +277,8 @@ PYBIND11_MODULE(nfield, m) {
                              "The resolved config of the run that wrote the checkpoint (YAML).")
       .def_property_readonly("has_ansatz",
                              [](const CheckpointField& f) { return f.ansatz_ != nullptr; })
-      .def(
-          "values",
-          [](const CheckpointField& f, const py::handle& x) -> py::object {
-            return f.streams(x, StreamSpec::values(f.input_dim()))["value"];
-          },
-          py::arg("points"), "u at N × d points: N × m.")
-      .def(
-          "__call__",
-          [](const CheckpointField& f, const py::handle& x) -> py::object {
-            return f.streams(x, StreamSpec::values(f.input_dim()))["value"];
-          },
-          py::arg("points"))
+      .def("values", values, py::arg("points"), "u at N × d points: N × m.")
+      .def("__call__", values, py::arg("points"))
       .def(
           "gradient",
           [](const CheckpointField& f, const py::handle& x) -> py::object {
