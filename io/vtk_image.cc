@@ -3,6 +3,8 @@
 
 #include <stdexcept>
 
+#include <vtkDoubleArray.h>
+#include <vtkFieldData.h>
 #include <vtkImageData.h>
 #include <vtkNew.h>
 #include <vtkPointData.h>
@@ -17,7 +19,7 @@ namespace nfield::io {
 namespace fs = std::filesystem;
 
 void write_vti(const fs::path& path, const Grid& grid, const PointArrays& arrays,
-               Precision precision) {
+               Precision precision, const FieldData& field_data) {
   for (int d = 0; d < 3; ++d)
     if (grid.dims[d] < 1)
       throw std::invalid_argument("write_vti: '" + path.string() + "': grid dims below 1");
@@ -29,6 +31,12 @@ void write_vti(const fs::path& path, const Grid& grid, const PointArrays& arrays
     add_point_arrays(image->GetPointData(), arrays, grid.point_count(), precision);
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument("write_vti: '" + path.string() + "': " + e.what());
+  }
+  for (const auto& [name, value] : field_data) {
+    vtkNew<vtkDoubleArray> array;
+    array->SetName(name.c_str());
+    array->InsertNextValue(value);
+    image->GetFieldData()->AddArray(array);
   }
   write_atomically(path, [&](const fs::path& tmp) {
     vtkNew<vtkXMLImageDataWriter> writer;
@@ -65,6 +73,12 @@ ImageData read_vti(const fs::path& path) {
     out.grid.origin[d] = image->GetOrigin()[d] + extent[2 * d] * out.grid.spacing[d];
   }
   out.arrays = get_point_arrays(image->GetPointData());
+  vtkFieldData* fields = image->GetFieldData();
+  for (int k = 0; fields && k < fields->GetNumberOfArrays(); ++k) {
+    vtkDataArray* array = fields->GetArray(k);
+    if (array && array->GetName() && array->GetNumberOfTuples() == 1 && array->GetNumberOfComponents() == 1)
+      out.field_data[array->GetName()] = array->GetTuple1(0);
+  }
   return out;
 }
 

@@ -245,6 +245,11 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
   if (grid.has_error) {
     metrics["rel_l2"] = grid.rel_l2;
     metrics["max_abs_err"] = grid.max_abs_err;
+    if (!grid.frame_rel_l2.empty()) {
+      metrics["max_frame_rel_l2"] = *std::max_element(grid.frame_rel_l2.begin(), grid.frame_rel_l2.end());
+      metrics["frame_rel_l2"] = grid.frame_rel_l2;
+      metrics["frame_times"] = grid.frame_times;
+    }
   }
   if (setup.problem->writes_grid_outputs()) metrics["residual_rms"] = grid.residual_rms;
   if (communicator.size() > 1) {

@@ -52,6 +52,11 @@ struct ErrorSums {
         max_abs = std::max(max_abs, error.row(i).cwiseAbs().maxCoeff());
       }
   }
+  void merge(const ErrorSums& other) {
+    error_sq += other.error_sq;
+    exact_sq += other.exact_sq;
+    max_abs = std::max(max_abs, other.max_abs);
+  }
   double rel_l2() const { return exact_sq > 0 ? std::sqrt(error_sq / exact_sq) : std::sqrt(error_sq); }
 };
 
@@ -71,7 +76,13 @@ GridMetrics grid_error(const Problem& problem, const StreamEvaluator& evaluate,
     double t;
     const Eigen::MatrixXd x = frame_points(domain, space, k, frames, &t);
     const Eigen::MatrixXd exact = problem.exact(x);
-    sums.add(evaluate(layout, x).stream(0) - exact, exact, problem.error_mask(x));
+    ErrorSums frame;
+    frame.add(evaluate(layout, x).stream(0) - exact, exact, problem.error_mask(x));
+    sums.merge(frame);
+    if (domain.has_time()) {
+      metrics.frame_rel_l2.push_back(frame.rel_l2());
+      metrics.frame_times.push_back(t);
+    }
   }
   metrics.has_error = true;
   metrics.rel_l2 = sums.rel_l2();
@@ -124,10 +135,18 @@ GridMetrics write_grid_outputs(const Problem& problem, const StreamEvaluator& ev
       residual_sq += r.squaredNorm();
       residual_count += r.rows();
     }
+    std::map<std::string, double, std::less<>> field_data;
     if (problem.has_exact()) {
       const Eigen::MatrixXd exact = problem.exact(x);
       const Eigen::MatrixXd error = u - exact;
-      sums.add(error, exact, problem.error_mask(x));
+      ErrorSums frame;
+      frame.add(error, exact, problem.error_mask(x));
+      sums.merge(frame);
+      if (domain.has_time()) {
+        metrics.frame_rel_l2.push_back(frame.rel_l2());
+        metrics.frame_times.push_back(t);
+        field_data["rel_l2"] = frame.rel_l2();
+      }
       for (int c = 0; c < channels; ++c) {
         arrays["exact_" + names[c]] = exact.col(c);
         arrays["error_" + names[c]] = error.col(c);
@@ -137,7 +156,7 @@ GridMetrics write_grid_outputs(const Problem& problem, const StreamEvaluator& ev
     if (domain.has_time()) {
       char file[64];
       std::snprintf(file, sizeof file, "frame_%04d.vti", k);
-      io::write_vti(output.dir / file, grid, arrays);
+      io::write_vti(output.dir / file, grid, arrays, io::Precision::kFloat64, field_data);
       pvd.add(t, file);
       if (d == 1) xt_image.row(frames - 1 - k) = u.col(0).transpose();
     } else {

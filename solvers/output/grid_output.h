@@ -9,6 +9,7 @@
 #include <functional>
 #include <map>
 #include <string>
+#include <vector>
 
 #include "autodiff/streams.h"
 #include "solvers/output/output_options.h"
@@ -25,6 +26,8 @@ struct GridMetrics {
   double rel_l2 = 0;
   double max_abs_err = 0;
   double residual_rms = 0;
+  // Time-dependent problems: rel_l2 of each output frame, at frame_times.
+  std::vector<double> frame_rel_l2, frame_times;
 };
 
 // rel_l2 and max_abs_err on the output grid (and frames) without writing anything; the

@@ -44,16 +44,24 @@
 //   surface.vtp, surface.ply   the zero level set of u on output.grid (flying edges), with
 //                              outward normals in the .vtp;
 //   metrics   surface_vertices, surface_triangles, surface_components (connected pieces of the
-//             zero level set) and surface_largest_component_area_share (io/surface_components.h),
-//             and with reference_mesh:
+//             zero level set) and surface_largest_component_area_share (io/surface_components.h);
+//             the comparison with reference_mesh, or without one with the input points
+//             (io/mesh_distance.h, from the vertices of each):
 //             chamfer_surface_to_mesh, chamfer_mesh_to_surface (mean distances of the vertices
-//             of one surface to the other), chamfer_mean (their mean: the symmetric Chamfer
+//             of one surface to the other; to the nearest input point and from each input point
+//             to the surface without a mesh), chamfer_mean (their mean: the symmetric Chamfer
 //             distance), chamfer_max (the largest of all those distances, a Hausdorff estimate),
+//             both also divided by the bounding-box diagonal of the mesh or points
+//             (chamfer_mean_per_diagonal, chamfer_max_per_diagonal), normal_consistency (mean
+//             |n · n'| of vertex normals against the nearest triangle's; without a mesh, the
+//             input normals against the surface's) and chamfer_seconds (their cost);
+//             with reference_mesh also
 //             sign_accuracy (the fraction of output grid points where sign(u) agrees with
 //             inside (−)/outside (+) of the reference mesh, from VTK's implicit signed distance)
 //             and sign_accuracy_band (the same over the grid points closer to the reference
-//             surface than 5% of its bounding-box diagonal).
+//             surface than 5% of its bounding-box diagonal), and sign_seconds.
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -270,22 +278,51 @@ class Sdf final : public Problem {
     const io::SurfaceComponents pieces = io::surface_components(surface);
     metrics.emplace_back("surface_components", pieces.count);
     metrics.emplace_back("surface_largest_component_area_share", pieces.largest_area_share);
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    const char* chamfer_keys[] = {"chamfer_surface_to_mesh", "chamfer_mesh_to_surface", "chamfer_mean",
+                                  "chamfer_max", "chamfer_mean_per_diagonal", "chamfer_max_per_diagonal",
+                                  "normal_consistency"};
+    if (surface.triangles.rows() == 0) {
+      for (const char* key : chamfer_keys) metrics.emplace_back(key, nan);
+      if (reference_) {
+        metrics.emplace_back("sign_accuracy", nan);
+        metrics.emplace_back("sign_accuracy_band", nan);
+      }
+      return;
+    }
+    // Against the reference mesh, or else against the input cloud (its points and normals).
+    const auto started = std::chrono::steady_clock::now();
+    io::SurfaceComparison c;
+    Eigen::MatrixXd target_points;
+    if (reference_) {
+      c = io::compare_surfaces(surface, *reference_);
+      target_points = reference_->vertices;
+    } else {
+      target_points = to_original(points_);
+      c.a_to_b = io::point_cloud_distance(surface.vertices, target_points);
+      const io::ClosestTriangles back = io::closest_triangles(target_points, surface);
+      c.b_to_a = back.distance;
+      double sum = 0;
+      const Eigen::MatrixXd faces = io::triangle_normals(surface);
+      for (Eigen::Index p = 0; p < target_points.rows(); ++p)
+        sum += std::abs(normals_.row(p).dot(faces.row(back.triangle(p))));
+      c.normal_consistency = sum / static_cast<double>(target_points.rows());
+    }
+    const double diagonal = (target_points.colwise().maxCoeff() - target_points.colwise().minCoeff()).norm();
+    metrics.emplace_back("chamfer_surface_to_mesh", c.a_to_b.mean());
+    metrics.emplace_back("chamfer_mesh_to_surface", c.b_to_a.mean());
+    metrics.emplace_back("chamfer_mean", c.chamfer_mean());
+    metrics.emplace_back("chamfer_max", c.chamfer_max());
+    metrics.emplace_back("chamfer_mean_per_diagonal", c.chamfer_mean() / diagonal);
+    metrics.emplace_back("chamfer_max_per_diagonal", c.chamfer_max() / diagonal);
+    metrics.emplace_back("normal_consistency", c.normal_consistency);
+    metrics.emplace_back("chamfer_seconds",
+                         std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
     if (!reference_) return;
 
-    const double nan = std::numeric_limits<double>::quiet_NaN();
-    if (surface.triangles.rows() > 0) {
-      const Eigen::VectorXd a = io::mesh_distance(surface.vertices, *reference_);
-      const Eigen::VectorXd b = io::mesh_distance(reference_->vertices, surface);
-      metrics.emplace_back("chamfer_surface_to_mesh", a.mean());
-      metrics.emplace_back("chamfer_mesh_to_surface", b.mean());
-      metrics.emplace_back("chamfer_mean", 0.5 * (a.mean() + b.mean()));
-      metrics.emplace_back("chamfer_max", std::max(a.maxCoeff(), b.maxCoeff()));
-    } else {
-      for (const char* key : {"chamfer_surface_to_mesh", "chamfer_mesh_to_surface", "chamfer_mean", "chamfer_max"})
-        metrics.emplace_back(key, nan);
-    }
     const double band = 0.05 * (reference_->vertices.colwise().maxCoeff() -
                                 reference_->vertices.colwise().minCoeff()).norm();
+    const auto sign_started = std::chrono::steady_clock::now();
     const Eigen::VectorXd reference = signed_mesh_distance(to_original(x), *reference_, band);
     Eigen::Index agree = 0, near = 0, near_agree = 0;
     for (Eigen::Index p = 0; p < n; ++p) {
@@ -299,6 +336,8 @@ class Sdf final : public Problem {
     metrics.emplace_back("sign_accuracy", static_cast<double>(agree) / static_cast<double>(n));
     metrics.emplace_back("sign_accuracy_band",
                          near > 0 ? static_cast<double>(near_agree) / static_cast<double>(near) : nan);
+    metrics.emplace_back("sign_seconds",
+                         std::chrono::duration<double>(std::chrono::steady_clock::now() - sign_started).count());
   }
 
  private:

@@ -10,6 +10,8 @@
 //     speed: 2                    # c: a number, or an expression c(x, y, z, t) > 0
 //     source: "0"                 # f, optional (default 0)
 //     exact: "sin(pi*x)*cos(2*pi*t)"   # optional: error metrics
+//     reference: finite_difference     # or {cells: 512, cfl: 0.5, snapshots: 101}: instead
+//                                      # of `exact`, a computed reference for the metrics
 //   conditions:
 //     - {on: boundary, type: dirichlet, value: "0"}
 //     - {on: initial, type: value, value: "sin(pi*x)", weight: 10}
@@ -25,10 +27,20 @@
 // (C is the same for every point of a pass), so then the pass carries two operator streams,
 // u_tt (C = e_t e_tᵀ) and Δu (C = diag(1, …, 1, 0)), and the residual weights the second by
 // the per-point coefficient −c(x)² — one stream more, same residual.
+//
+// `reference` solves the same equation, conditions and initial data by finite differences on
+// a fine grid before training (solvers/problems/wave_reference.h: the scheme, its order and
+// its cost) and reports the errors against it, frame by frame as for `exact`. It needs one
+// Dirichlet or Neumann item for every face and both initial items.
+#include <chrono>
 #include <cmath>
+#include <cstdio>
 
+#include "io/registry.h"
+#include "solvers/conditions/condition_values.h"
 #include "solvers/conditions/conditions.h"
 #include "solvers/problems/problems.h"
+#include "solvers/problems/wave_reference.h"
 
 namespace nfield::solvers {
 namespace {
@@ -54,10 +66,31 @@ class Wave final : public Problem {
     source_ = std::make_shared<io::Expression>(equation.get_expression_or("source", "0", vars));
     if (equation.has("exact"))
       exact_ = std::make_shared<io::Expression>(equation.get_expression("exact", vars));
+    const WaveReferenceOptions reference = reference_options(equation);
     equation.reject_unknown_keys();
     // (condition_terms rejects the empty mapping child_or_empty gives for an absent key.)
     if (context.root.has("conditions"))
       conditions_ = condition_terms(context.root.child("conditions"), domain_, 1, &ansatz_);
+    if (equation.has("reference")) {
+      WaveReferenceData data = reference_data(context.root, speed);
+      data.source = *source_;
+      const auto started = std::chrono::steady_clock::now();
+      try {
+        reference_ = std::make_shared<WaveReference>(domain_, data, reference, [](long n, long total) {
+          std::printf("wave reference: step %ld/%ld\n", n, total);
+          std::fflush(stdout);
+        });
+      } catch (const std::invalid_argument& e) {
+        throw equation.error("reference", e.what());
+      } catch (const std::runtime_error& e) {
+        throw equation.error("reference", e.what());
+      }
+      const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+      const auto& cells = reference_->cells();
+      std::printf("wave reference: finite differences on %d", cells[0]);
+      for (int a = 1; a < domain_.space_dim(); ++a) std::printf("x%d", cells[a]);
+      std::printf(" cells, %ld steps of %.3g, %.1f s\n", reference_->steps(), reference_->time_step(), seconds);
+    }
   }
 
   const Domain& domain() const override { return domain_; }
@@ -107,16 +140,74 @@ class Wave final : public Problem {
   }
 
   std::shared_ptr<const Ansatz> ansatz() const override { return ansatz_; }
-  bool has_exact() const override { return exact_ != nullptr; }
-  Eigen::MatrixXd exact(const Eigen::MatrixXd& x) const override { return exact_->evaluate(x); }
+  bool has_exact() const override { return exact_ != nullptr || reference_ != nullptr; }
+  Eigen::MatrixXd exact(const Eigen::MatrixXd& x) const override {
+    return reference_ ? reference_->values(x) : exact_->evaluate(x);
+  }
 
  private:
+  // `reference`: finite_difference, or a map of WaveReferenceOptions.
+  static WaveReferenceOptions reference_options(const io::ConfigNode& equation) {
+    WaveReferenceOptions options;
+    if (!equation.has("reference")) return options;
+    if (equation.has("exact")) throw equation.error("reference", "give either exact or reference, not both");
+    if (!equation.has_map("reference")) {
+      equation.get_choice("reference", {"finite_difference"});
+      return options;
+    }
+    const io::ConfigNode node = equation.child("reference");
+    if (node.has("cells")) options.cells = node.get_in_range("cells", 4, 1 << 20);
+    options.cfl = node.get_or("cfl", options.cfl);
+    node.require("cfl", options.cfl > 0 && options.cfl <= 1, "expected 0 < cfl <= 1 (the stability limit is 1)");
+    if (node.has("snapshots")) options.snapshots = node.get_in_range("snapshots", 2, 1 << 20);
+    node.reject_unknown_keys();
+    return options;
+  }
+
+  // The reference's speed, initial data and face conditions from the config's items.
+  WaveReferenceData reference_data(const io::ConfigNode& root, const io::Expression& speed) const {
+    const io::ConfigNode equation = root.child("equation");
+    WaveReferenceData data;
+    data.speed = speed;
+    data.faces.resize(2 * domain_.space_dim());
+    bool has_value = false, has_velocity = false;
+    const io::ConfigNode conditions = root.child_or_empty("conditions");
+    for (std::size_t i = 0; conditions.is_sequence() && i < conditions.size(); ++i) {
+      const io::ConfigNode item = conditions.at(i);
+      const io::Expression value = channel_expressions(item, "value", domain_, 1).front();
+      const std::string type = Registry<int>::lower(item.get<std::string>("type"));
+      if (!item.has_list("on") && Registry<int>::lower(item.get<std::string>("on")) == "initial") {
+        (type == "value" ? data.initial_value : data.initial_velocity) = value;
+        (type == "value" ? has_value : has_velocity) = true;
+        continue;
+      }
+      for (const Face& face : condition_faces(item, domain_)) {
+        auto& slot = data.faces[2 * face.axis + (face.upper ? 1 : 0)];
+        if (slot)
+          throw item.error("on", "face " + face.name() + " has a condition already; the finite-difference "
+                                 "reference (equation.reference) needs exactly one per face");
+        slot = WaveFaceCondition{type == "dirichlet", value};
+      }
+    }
+    for (const Face& face : domain_.faces())
+      if (!data.faces[2 * face.axis + (face.upper ? 1 : 0)])
+        throw equation.error("reference", "the finite-difference reference needs a dirichlet or neumann "
+                                          "condition on every face; " + face.name() + " has none");
+    if (!has_value || !has_velocity)
+      throw equation.error("reference", std::string("the finite-difference reference needs the initial ") +
+                                            (has_value ? "velocity" : "value") +
+                                            " (a condition with on: initial, type: " +
+                                            (has_value ? "velocity" : "value") + ")");
+    return data;
+  }
+
   Domain domain_;
   double constant_speed_ = 0;                     // when the speed is a number
   std::shared_ptr<io::Expression> speed_;         // when it varies (else null)
   std::shared_ptr<io::Expression> source_, exact_;
   std::vector<LossTerm> conditions_;
   std::shared_ptr<const Ansatz> ansatz_;
+  std::shared_ptr<const WaveReference> reference_;  // equation.reference (else null)
 };
 
 }  // namespace

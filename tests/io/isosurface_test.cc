@@ -1,7 +1,11 @@
 // SPDX-License-Identifier: MIT
 #include "io/isosurface.h"
 
+#include <omp.h>
+
+#include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <numbers>
 #include <stdexcept>
 
@@ -112,6 +116,76 @@ TEST(Isosurface, MeshDistanceOfOneTriangle) {
   EXPECT_NEAR(d(0), 2, 1e-12);
   EXPECT_NEAR(d(1), 1, 1e-12);
   EXPECT_NEAR(d(2), 0, 1e-12);
+}
+
+// Two level sets of distances to concentric spheres, radii 0.5 and 0.6: every vertex of one
+// is 0.1 from the other (to the marching-cubes error), and their normals agree.
+TEST(Isosurface, CompareConcentricSpheres) {
+  const Grid grid = make_grid({-1, -1, -1}, {1, 1, 1}, {40, 40, 40});
+  const Eigen::VectorXd r = grid.points(3).rowwise().norm();
+  const TriangleMesh inner = extract_isosurface(grid, r.array() - 0.5, 0.0, true);
+  const TriangleMesh outer = extract_isosurface(grid, r.array() - 0.6, 0.0, true);
+  const SurfaceComparison c = compare_surfaces(inner, outer);
+  ASSERT_EQ(c.a_to_b.size(), inner.vertices.rows());
+  ASSERT_EQ(c.b_to_a.size(), outer.vertices.rows());
+  EXPECT_NEAR(c.a_to_b.mean(), 0.1, 0.005);
+  EXPECT_NEAR(c.b_to_a.mean(), 0.1, 0.005);
+  EXPECT_NEAR(c.chamfer_mean(), 0.1, 0.005);
+  EXPECT_LT(c.chamfer_max(), 0.11);
+  EXPECT_GT(c.normal_consistency, 0.99);
+  // Threads give the same numbers as one.
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(1);
+  const SurfaceComparison serial = compare_surfaces(inner, outer);
+  omp_set_num_threads(std::max(2, threads));
+  const SurfaceComparison parallel = compare_surfaces(inner, outer);
+  omp_set_num_threads(threads);
+  EXPECT_EQ(serial.a_to_b, parallel.a_to_b);
+  EXPECT_EQ(serial.b_to_a, parallel.b_to_a);
+  EXPECT_EQ(serial.normal_consistency, parallel.normal_consistency);
+}
+
+// Normal consistency tells crossing surfaces from parallel ones: the squares z = 0 and x = 0
+// (through each other) have perpendicular normals everywhere, so 0; z = 0 against z = 0.1, 1.
+TEST(Isosurface, NormalConsistencyOfPlanes) {
+  const auto square = [](int normal_axis, double offset) {
+    TriangleMesh m;
+    const int n = 8;
+    m.vertices.resize((n + 1) * (n + 1), 3);
+    for (int j = 0; j <= n; ++j)
+      for (int i = 0; i <= n; ++i) {
+        Eigen::RowVector3d p;
+        p(normal_axis) = offset;
+        p((normal_axis + 1) % 3) = -1 + 2.0 * i / n;
+        p((normal_axis + 2) % 3) = -1 + 2.0 * j / n;
+        m.vertices.row(j * (n + 1) + i) = p;
+      }
+    m.triangles.resize(2 * n * n, 3);
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const int v = j * (n + 1) + i;
+        m.triangles.row(2 * (j * n + i)) << v, v + 1, v + n + 2;
+        m.triangles.row(2 * (j * n + i) + 1) << v, v + n + 2, v + n + 1;
+      }
+    return m;
+  };
+  EXPECT_NEAR(compare_surfaces(square(2, 0), square(0, 0)).normal_consistency, 0.0, 1e-12);
+  const SurfaceComparison parallel = compare_surfaces(square(2, 0), square(2, 0.1));
+  EXPECT_NEAR(parallel.normal_consistency, 1.0, 1e-12);
+  EXPECT_NEAR(parallel.chamfer_mean(), 0.1, 1e-12);
+  // Unit normals of each triangle, right-handed: +z for these.
+  const Eigen::MatrixXd normals = triangle_normals(square(2, 0));
+  EXPECT_NEAR((normals.col(2).array() - 1).abs().maxCoeff(), 0.0, 1e-12);
+  EXPECT_THROW(compare_surfaces(square(2, 0), TriangleMesh{}), std::invalid_argument);
+}
+
+TEST(Isosurface, PointCloudDistanceIsTheNearestPoint) {
+  std::srand(7);
+  const Eigen::MatrixXd cloud = Eigen::MatrixXd::Random(500, 3), points = Eigen::MatrixXd::Random(200, 3);
+  const Eigen::VectorXd d = point_cloud_distance(points, cloud);
+  for (Eigen::Index i = 0; i < points.rows(); ++i)
+    EXPECT_DOUBLE_EQ(d(i), std::sqrt((cloud.rowwise() - points.row(i)).rowwise().squaredNorm().minCoeff())) << i;
+  EXPECT_THROW(point_cloud_distance(points, Eigen::MatrixXd(0, 3)), std::invalid_argument);
 }
 
 TEST(Isosurface, Errors) {

@@ -255,10 +255,48 @@ output: {grid: [40, 40, 40], png: false}
               1e-12);
   EXPECT_GT(metrics["sign_accuracy"].get<double>(), 0.995);
   EXPECT_GT(metrics["sign_accuracy_band"].get<double>(), 0.98);
+  // Normals along the sphere's; the figures per bounding-box diagonal (2√3 radius).
+  EXPECT_GT(metrics["normal_consistency"].get<double>(), 0.99);
+  const double diagonal = (reference.vertices.colwise().maxCoeff() - reference.vertices.colwise().minCoeff()).norm();
+  EXPECT_NEAR(metrics["chamfer_mean_per_diagonal"].get<double>(), metrics["chamfer_mean"].get<double>() / diagonal, 1e-12);
+  EXPECT_NEAR(metrics["chamfer_max_per_diagonal"].get<double>(), metrics["chamfer_max"].get<double>() / diagonal, 1e-12);
+  EXPECT_GE(metrics["chamfer_seconds"].get<double>(), 0.0);
   EXPECT_EQ(metrics["surface_triangles"].get<double>(), static_cast<double>(surface.triangles.rows()));
   // A sphere's level set is one piece.
   EXPECT_EQ(metrics["surface_components"].get<double>(), 1.0);
   EXPECT_DOUBLE_EQ(metrics["surface_largest_component_area_share"].get<double>(), 1.0);
+  std::filesystem::remove_all(out);
+}
+
+// Without a reference mesh the surface is compared with the input points and normals.
+TEST(Sdf, SphereCloudWithoutMeshIsComparedWithItsPoints) {
+  const std::filesystem::path out = test_dir() / "sphere_points_out";
+  std::filesystem::remove_all(out);
+  const Eigen::Vector3d center(3, -2, 1);
+  const double radius = 5;
+  write_sphere_cloud("sphere_points", 2000, radius, center);
+  RunSetup setup = load_run(write_config("sphere_points", R"(
+problem: sdf
+equation: {points: sphere_points.xyz, margin: 0.5}
+field: {type: siren, hidden: [32, 32], first_omega: 3, hidden_omega: 3}
+training:
+  seed: 3
+  threads: 2
+  batch: {surface: 256, interior: 256}
+  stages:
+    - {optimizer: adam, steps: 1000, lr: 2.0e-3, schedule: cosine, lr_final: 1.0e-4}
+output: {grid: [40, 40, 40], png: false}
+)"), {}, out);
+  ASSERT_EQ(execute_run(setup), 0);
+  std::ifstream file(out / "metrics.json");
+  const nlohmann::json metrics = nlohmann::json::parse(file);
+  // Points to the surface: as close as the surface is to the sphere. Surface vertices to
+  // the nearest point: up to about half the points' spacing (√(4π r²/2000) ≈ 0.08 r).
+  EXPECT_LT(metrics["chamfer_mesh_to_surface"].get<double>(), 0.01 * radius);
+  EXPECT_LT(metrics["chamfer_surface_to_mesh"].get<double>(), 0.05 * radius);
+  EXPECT_GT(metrics["chamfer_surface_to_mesh"].get<double>(), 0.005 * radius);
+  EXPECT_GT(metrics["normal_consistency"].get<double>(), 0.99);
+  EXPECT_EQ(metrics.count("sign_accuracy"), 0u);
   std::filesystem::remove_all(out);
 }
 

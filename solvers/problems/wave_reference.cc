@@ -1,0 +1,306 @@
+// SPDX-License-Identifier: MIT
+#include "solvers/problems/wave_reference.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace nfield::solvers {
+namespace {
+
+std::invalid_argument bad(const std::string& what) {
+  return std::invalid_argument("wave reference: " + what);
+}
+
+// Catmull–Rom weights of the nodes j−1, j, j+1, j+2 at the fraction s ∈ [0, 1] past node j.
+std::array<double, 4> catmull_rom(double s) {
+  const double s2 = s * s, s3 = s2 * s;
+  return {0.5 * (-s3 + 2 * s2 - s), 0.5 * (3 * s3 - 5 * s2 + 2), 0.5 * (-3 * s3 + 4 * s2 + s),
+          0.5 * (s3 - s2)};
+}
+
+}  // namespace
+
+WaveReference::WaveReference(const Domain& domain, const WaveReferenceData& data,
+                             const WaveReferenceOptions& options,
+                             std::function<void(long, long)> progress) {
+  if (!domain.has_time()) throw bad("the domain has no time interval");
+  dim_ = domain.space_dim();
+  if (dim_ < 1 || dim_ > 3) throw bad("1 to 3 space dimensions");
+  if (static_cast<int>(data.faces.size()) != 2 * dim_) throw bad("one condition per face expected");
+  for (const Face& face : domain.faces())
+    if (!data.faces[2 * face.axis + (face.upper ? 1 : 0)])
+      throw bad("face " + face.name() + " has no boundary condition (every face needs a dirichlet or neumann item)");
+  const int cells = options.cells > 0 ? options.cells : (dim_ == 1 ? 4096 : dim_ == 2 ? 512 : 96);
+  if (cells < 4 || cells > (1 << 20)) throw bad("cells = " + std::to_string(cells) + ": expected 4 to 2^20");
+  if (!(options.cfl > 0 && options.cfl <= 1))
+    throw bad("cfl = " + std::to_string(options.cfl) + ": expected 0 < cfl <= 1 (the scheme's stability limit)");
+  if (options.snapshots < 2) throw bad("snapshots = " + std::to_string(options.snapshots) + ": expected at least 2");
+
+  double longest = 0;
+  for (int a = 0; a < dim_; ++a) longest = std::max(longest, domain.upper()[a] - domain.lower()[a]);
+  Eigen::Index nodes = 1;
+  for (int a = 0; a < dim_; ++a) {
+    const double length = domain.upper()[a] - domain.lower()[a];
+    cells_[a] = std::max(4, static_cast<int>(std::lround(cells * length / longest)));
+    h_[a] = length / cells_[a];
+    lower_[a] = domain.lower()[a];
+    stride_[a] = nodes;
+    nodes *= cells_[a] + 1;
+  }
+  for (int a = dim_; a < 3; ++a) stride_[a] = nodes;
+  const double bytes = 8.0 * static_cast<double>(nodes) * options.snapshots;
+  if (bytes > 4.0 * (1ull << 30))
+    throw bad("cells = " + std::to_string(cells) + " and snapshots = " + std::to_string(options.snapshots) +
+              " need " + std::to_string(bytes / (1ull << 30)).substr(0, 5) + " GiB; the limit is 4 GiB");
+  std::tie(t0_, t1_) = domain.time();
+
+  // Node coordinates (x…, t) for the expressions, and which nodes a Dirichlet face holds.
+  const int t_col = dim_;
+  Eigen::MatrixXd points(nodes, dim_ + 1);
+  Eigen::Array<bool, Eigen::Dynamic, 1> fixed = Eigen::Array<bool, Eigen::Dynamic, 1>::Constant(nodes, false);
+  std::array<int, 3> i{0, 0, 0};
+  for (Eigen::Index n = 0; n < nodes; ++n) {
+    for (int a = 0; a < dim_; ++a) {
+      i[a] = static_cast<int>((n / stride_[a]) % (cells_[a] + 1));
+      points(n, a) = lower_[a] + i[a] * h_[a];
+      for (int side = 0; side < 2; ++side)
+        if (i[a] == (side ? cells_[a] : 0) && data.faces[2 * a + side]->dirichlet) fixed(n) = true;
+    }
+  }
+  points.col(t_col).setConstant(t0_);
+  std::vector<Eigen::Index> dirichlet_nodes;
+  for (Eigen::Index n = 0; n < nodes; ++n)
+    if (fixed(n)) dirichlet_nodes.push_back(n);
+  Eigen::MatrixXd dirichlet_points(static_cast<Eigen::Index>(dirichlet_nodes.size()), dim_ + 1);
+  for (std::size_t k = 0; k < dirichlet_nodes.size(); ++k) dirichlet_points.row(k) = points.row(dirichlet_nodes[k]);
+  // Which Dirichlet expression each of those nodes takes (the first face that holds it).
+  std::vector<int> dirichlet_face(dirichlet_nodes.size(), -1);
+  for (std::size_t k = 0; k < dirichlet_nodes.size(); ++k)
+    for (int a = 0; a < dim_ && dirichlet_face[k] < 0; ++a)
+      for (int side = 0; side < 2 && dirichlet_face[k] < 0; ++side) {
+        const double coordinate = side ? domain.upper()[a] : domain.lower()[a];
+        if (std::abs(dirichlet_points(k, a) - coordinate) <= 1e-12 * std::max(1.0, std::abs(coordinate)) &&
+            data.faces[2 * a + side]->dirichlet)
+          dirichlet_face[k] = 2 * a + side;
+      }
+  // Neumann ghost terms: per (face, node on it) the term 2g/h_a of the Laplacian.
+  struct Ghost {
+    Eigen::Index node;
+    int axis, face;
+  };
+  std::vector<Ghost> ghosts;
+  for (Eigen::Index n = 0; n < nodes; ++n) {
+    if (fixed(n)) continue;
+    for (int a = 0; a < dim_; ++a) {
+      const int ia = static_cast<int>((n / stride_[a]) % (cells_[a] + 1));
+      if (ia == 0) ghosts.push_back({n, a, 2 * a});
+      if (ia == cells_[a]) ghosts.push_back({n, a, 2 * a + 1});
+    }
+  }
+  Eigen::MatrixXd ghost_points(static_cast<Eigen::Index>(ghosts.size()), dim_ + 1);
+  for (std::size_t k = 0; k < ghosts.size(); ++k) ghost_points.row(k) = points.row(ghosts[k].node);
+
+  const auto at_time = [&](Eigen::MatrixXd& p, double t) { p.col(t_col).setConstant(t); };
+  const auto evaluate_boundary = [&](double t, Eigen::VectorXd& dirichlet, Eigen::VectorXd& ghost_term) {
+    at_time(dirichlet_points, t);
+    at_time(ghost_points, t);
+    dirichlet.setZero(static_cast<Eigen::Index>(dirichlet_nodes.size()));
+    for (int f = 0; f < 2 * dim_; ++f) {
+      const WaveFaceCondition& face = *data.faces[f];
+      std::vector<Eigen::Index> rows;
+      if (face.dirichlet) {
+        for (std::size_t k = 0; k < dirichlet_nodes.size(); ++k)
+          if (dirichlet_face[k] == f) rows.push_back(static_cast<Eigen::Index>(k));
+        Eigen::MatrixXd p(static_cast<Eigen::Index>(rows.size()), dim_ + 1);
+        for (std::size_t r = 0; r < rows.size(); ++r) p.row(r) = dirichlet_points.row(rows[r]);
+        const Eigen::VectorXd g = face.value.evaluate(p);
+        for (std::size_t r = 0; r < rows.size(); ++r) dirichlet(rows[r]) = g(r);
+      }
+    }
+    ghost_term.resize(static_cast<Eigen::Index>(ghosts.size()));
+    for (int f = 0; f < 2 * dim_; ++f) {
+      const WaveFaceCondition& face = *data.faces[f];
+      if (face.dirichlet) continue;
+      std::vector<Eigen::Index> rows;
+      for (std::size_t k = 0; k < ghosts.size(); ++k)
+        if (ghosts[k].face == f) rows.push_back(static_cast<Eigen::Index>(k));
+      Eigen::MatrixXd p(static_cast<Eigen::Index>(rows.size()), dim_ + 1);
+      for (std::size_t r = 0; r < rows.size(); ++r) p.row(r) = ghost_points.row(rows[r]);
+      const Eigen::VectorXd g = face.value.evaluate(p);
+      for (std::size_t r = 0; r < rows.size(); ++r)
+        ghost_term(rows[r]) = 2.0 * g(r) / h_[ghosts[rows[r]].axis];
+    }
+  };
+
+  // The speed squared and the source at the nodes (once when they do not depend on t).
+  const bool speed_varies = data.speed.uses("t"), source_varies = data.source.uses("t");
+  const bool boundary_varies = std::any_of(data.faces.begin(), data.faces.end(),
+                                            [](const auto& f) { return f->value.uses("t"); });
+  Eigen::VectorXd c2, source;
+  const auto evaluate_coefficients = [&](double t) {
+    at_time(points, t);
+    const Eigen::VectorXd c = data.speed.evaluate(points);
+    for (Eigen::Index n = 0; n < nodes; ++n)
+      if (!(std::isfinite(c(n)) && c(n) > 0))
+        throw std::runtime_error("wave reference: the speed is " + std::to_string(c(n)) + " at node " +
+                                 std::to_string(n) + " (t = " + std::to_string(t) + "); expected c > 0");
+    c2 = c.array().square().matrix();
+    source = data.source.is_constant() && data.source.evaluate(std::span<const double>()) == 0
+                 ? Eigen::VectorXd()
+                 : data.source.evaluate(points);
+  };
+  // The largest speed: over the nodes at t0, and at 11 times if it varies in time.
+  double c2_max = 0;
+  for (int k = 0; k <= (speed_varies ? 10 : 0); ++k) {
+    evaluate_coefficients(t0_ + (t1_ - t0_) * k / 10.0);
+    c2_max = std::max(c2_max, c2.maxCoeff());
+  }
+  double inverse_h2 = 0;
+  for (int a = 0; a < dim_; ++a) inverse_h2 += 1.0 / (h_[a] * h_[a]);
+  const double dt_limit = options.cfl / std::sqrt(c2_max * inverse_h2);
+  snapshot_spacing_ = (t1_ - t0_) / (options.snapshots - 1);
+  const long steps_per_snapshot = std::max(1L, static_cast<long>(std::ceil(snapshot_spacing_ / dt_limit)));
+  dt_ = snapshot_spacing_ / steps_per_snapshot;
+  steps_ = steps_per_snapshot * (options.snapshots - 1);
+
+  // Acceleration c²Δ_h u + f at the free nodes (Dirichlet nodes: 0).
+  Eigen::VectorXd dirichlet, ghost_term;
+  evaluate_coefficients(t0_);
+  evaluate_boundary(t0_, dirichlet, ghost_term);
+  std::array<double, 3> inv_h2{0, 0, 0};
+  for (int a = 0; a < dim_; ++a) inv_h2[a] = 1.0 / (h_[a] * h_[a]);
+  const int last[3] = {cells_[0], dim_ > 1 ? cells_[1] : 0, dim_ > 2 ? cells_[2] : 0};
+  const auto acceleration = [&](const Eigen::VectorXd& u, Eigen::VectorXd& acc) {
+    acc.setZero(nodes);
+    const double* v = u.data();
+    for (int i2 = 0; i2 <= last[2]; ++i2)
+      for (int i1 = 0; i1 <= last[1]; ++i1) {
+        const Eigen::Index row = stride_[1] * i1 + stride_[2] * i2;
+        const int ib[3] = {0, i1, i2};
+        for (int i0 = 0; i0 <= last[0]; ++i0) {
+          const Eigen::Index n = row + i0;
+          if (fixed(n)) continue;
+          double lap = 0;
+          for (int a = 0; a < dim_; ++a) {
+            const Eigen::Index s = stride_[a];
+            const int ia = a == 0 ? i0 : ib[a];
+            // At a Neumann face the ghost's mirror part: the missing neighbour is the other one.
+            const double minus = ia > 0 ? v[n - s] : v[n + s];
+            const double plus = ia < cells_[a] ? v[n + s] : v[n - s];
+            lap += (minus - 2 * v[n] + plus) * inv_h2[a];
+          }
+          acc(n) = c2(n) * lap;
+        }
+      }
+    for (std::size_t k = 0; k < ghosts.size(); ++k) acc(ghosts[k].node) += c2(ghosts[k].node) * ghost_term(k);
+    if (source.size() > 0) acc += source;
+    for (const Eigen::Index n : dirichlet_nodes) acc(n) = 0;
+  };
+  const auto set_dirichlet = [&](Eigen::VectorXd& u) {
+    for (std::size_t k = 0; k < dirichlet_nodes.size(); ++k) u(dirichlet_nodes[k]) = dirichlet(k);
+  };
+
+  at_time(points, t0_);
+  Eigen::VectorXd previous = data.initial_value.evaluate(points);
+  const Eigen::VectorXd velocity = data.initial_velocity.evaluate(points);
+  set_dirichlet(previous);
+  u_.push_back(previous.cast<float>());
+  u_t_.push_back(velocity.cast<float>());
+  Eigen::VectorXd acc, current, next;
+  acceleration(previous, acc);
+  current = previous + dt_ * velocity + 0.5 * dt_ * dt_ * acc;
+  const auto boundary_at = [&](double t) {
+    if (speed_varies || source_varies) evaluate_coefficients(t);
+    if (boundary_varies) evaluate_boundary(t, dirichlet, ghost_term);
+  };
+  boundary_at(t0_ + dt_);
+  set_dirichlet(current);
+
+  const auto started = std::chrono::steady_clock::now();
+  auto last_report = started;
+  for (long n = 1; n <= steps_; ++n) {  // current is uⁿ, previous uⁿ⁻¹
+    const double t = t0_ + n * dt_;
+    acceleration(current, acc);
+    next = 2 * current - previous + dt_ * dt_ * acc;
+    boundary_at(t + dt_);
+    set_dirichlet(next);
+    if (!next.allFinite())
+      throw std::runtime_error("wave reference: the solution is not finite at t = " + std::to_string(t + dt_));
+    if (n % steps_per_snapshot == 0) {
+      u_.push_back(current.cast<float>());
+      u_t_.push_back(((next - previous) / (2 * dt_)).cast<float>());
+    }
+    previous.swap(current);
+    current.swap(next);
+    const auto now = std::chrono::steady_clock::now();
+    if (progress && now - last_report > std::chrono::seconds(2)) {
+      progress(n, steps_);
+      last_report = now;
+    }
+  }
+}
+
+double WaveReference::interpolate_space(const Eigen::VectorXf& snapshot, const Eigen::RowVectorXd& x) const {
+  // Per axis: four consecutive nodes from first[a] and their weights. A stencil node beyond
+  // a face is the quadratic extrapolation 3u₀ − 3u₁ + u₂ of the nearest three, which keeps
+  // the third order there (clamping would drop it to the first).
+  std::array<int, 3> first{0, 0, 0};
+  std::array<std::array<double, 4>, 3> weight{};
+  for (int a = 0; a < 3; ++a) weight[a] = {1, 0, 0, 0};
+  for (int a = 0; a < dim_; ++a) {
+    const int last = cells_[a];
+    const double s = std::clamp((x(a) - lower_[a]) / h_[a], 0.0, static_cast<double>(last));
+    const int base = std::min(static_cast<int>(s), last - 1);
+    const std::array<double, 4> w = catmull_rom(s - base);
+    first[a] = std::clamp(base - 1, 0, last - 3);
+    weight[a] = {0, 0, 0, 0};
+    const auto add = [&](int node, double value) { weight[a][node - first[a]] += value; };
+    for (int q = 0; q < 4; ++q) {
+      const int m = base - 1 + q;
+      if (m < 0) {
+        add(0, 3 * w[q]), add(1, -3 * w[q]), add(2, w[q]);
+      } else if (m > last) {
+        add(last, 3 * w[q]), add(last - 1, -3 * w[q]), add(last - 2, w[q]);
+      } else {
+        add(m, w[q]);
+      }
+    }
+  }
+  double sum = 0;
+  const int span[3] = {4, dim_ > 1 ? 4 : 1, dim_ > 2 ? 4 : 1};
+  for (int c = 0; c < span[2]; ++c)
+    for (int b = 0; b < span[1]; ++b)
+      for (int a = 0; a < span[0]; ++a) {
+        const double w = weight[0][a] * weight[1][b] * weight[2][c];
+        if (w != 0) sum += w * snapshot(node({first[0] + a, first[1] + b, first[2] + c}));
+      }
+  return sum;
+}
+
+Eigen::VectorXd WaveReference::values(const Eigen::MatrixXd& x) const {
+  if (x.cols() != dim_ + 1) throw std::invalid_argument("WaveReference::values: expected " + std::to_string(dim_ + 1) + " columns");
+  Eigen::VectorXd out(x.rows());
+  const int last = static_cast<int>(u_.size()) - 1;
+  for (Eigen::Index r = 0; r < x.rows(); ++r) {
+    const double s = std::clamp((x(r, dim_) - t0_) / snapshot_spacing_, 0.0, static_cast<double>(last));
+    const int k = std::min(static_cast<int>(s), last - 1);
+    const double f = s - k;
+    const Eigen::RowVectorXd p = x.row(r);
+    const double u0 = interpolate_space(u_[k], p), u1 = interpolate_space(u_[k + 1], p);
+    if (f == 0) {
+      out(r) = u0;
+      continue;
+    }
+    const double v0 = interpolate_space(u_t_[k], p) * snapshot_spacing_;
+    const double v1 = interpolate_space(u_t_[k + 1], p) * snapshot_spacing_;
+    // Cubic Hermite on [k, k + 1].
+    const double f2 = f * f, f3 = f2 * f;
+    out(r) = (2 * f3 - 3 * f2 + 1) * u0 + (f3 - 2 * f2 + f) * v0 + (-2 * f3 + 3 * f2) * u1 + (f3 - f2) * v1;
+  }
+  return out;
+}
+
+}  // namespace nfield::solvers
