@@ -210,10 +210,11 @@ void add_bench_command(CLI::App& app) {
   auto accuracy = std::make_shared<AccuracyOptions>();
   auto accuracy_flag = std::make_shared<bool>(false);
   bench->add_flag("--accuracy", *accuracy_flag,
-                  "Run the accuracy table instead (configs/accuracy_CASE.yaml): rel_l2 after each "
-                  "optimizer stage, wall time, targets");
+                  "Run the accuracy table instead (apps/accuracy_bench.cc: the PDE cases' "
+                  "configs/accuracy_CASE.yaml and the SIREN experiments' configs): each case's figure "
+                  "(rel_l2 after each optimizer stage, PSNR, Chamfer distance), wall time, targets");
   bench->add_option("--cases", accuracy->cases, "--accuracy: the cases to run (default: all)");
-  bench->add_option("--configs", accuracy->configs, "--accuracy: folder of the accuracy_*.yaml configs")
+  bench->add_option("--configs", accuracy->configs, "--accuracy: folder of the cases' configs")
       ->check(CLI::ExistingDirectory)
       ->capture_default_str();
   bench->add_option("--out", accuracy->out, "--accuracy: output folder, one subfolder per case")

@@ -10,6 +10,8 @@
 // field's surface at the same grid (a conservative case). d is computed in a narrow band
 // only: on a 64³ grid first, then on the fine points whose coarse cell can reach the band.
 //
+// Then the inputs of sign_accuracy on the same grid (io/inside_mesh.h, near_mesh).
+//
 // Run: build/bench/chamfer_bench [grid (256)] [mesh (data/meshes/bunny00.ply)]
 #include <omp.h>
 
@@ -19,6 +21,7 @@
 #include <string>
 
 #include "io/grid.h"
+#include "io/inside_mesh.h"
 #include "io/isosurface.h"
 #include "io/mesh_distance.h"
 #include "io/triangle_mesh.h"
@@ -91,6 +94,17 @@ int main(int argc, char** argv) {
                 results[k].chamfer_max(), results[k].normal_consistency);
   }
   omp_set_num_threads(threads);
+
+  // 3. The inputs of sign_accuracy on the same grid: inside/outside by crossing parity, and
+  // which points lie within 5 % of the diagonal of the surface.
+  started = std::chrono::steady_clock::now();
+  const auto inside = io::inside_closed_mesh(fine, mesh);
+  const double parity_s = seconds_since(started);
+  started = std::chrono::steady_clock::now();
+  const auto near = io::grid_near_mesh(fine, mesh, 0.05 * (hi - lo).norm());
+  std::printf("sign inputs on %ld grid points: inside by parity %.2f s (%ld inside), band %.2f s (%ld near)\n",
+              static_cast<long>(points.rows()), parity_s, static_cast<long>(inside.count()), seconds_since(started),
+              static_cast<long>(near.count()));
   const bool same = results[0].a_to_b == results[1].a_to_b && results[0].b_to_a == results[1].b_to_a;
   std::printf("speed-up %.2fx over one thread; threaded results %s; target <= 5 s: %s\n", times[0] / times[1],
               same ? "identical" : "DIFFER", times[1] <= 5.0 ? "met" : "NOT met");

@@ -2,6 +2,8 @@
 #include "io/mesh_distance.h"
 
 #include <algorithm>
+#include <array>
+#include <vector>
 #include <cmath>
 #include <stdexcept>
 
@@ -108,6 +110,105 @@ Eigen::VectorXd point_cloud_distance(const Eigen::MatrixXd& points, const Eigen:
     const double x[3] = {points(i, 0), points(i, 1), points(i, 2)};
     const vtkIdType nearest = locator->FindClosestPoint(x);
     out(i) = (points.row(i) - cloud.row(nearest)).norm();
+  }
+  return out;
+}
+
+Eigen::Array<bool, Eigen::Dynamic, 1> near_mesh(const Eigen::MatrixXd& points, const TriangleMesh& mesh,
+                                                double radius) {
+  if (mesh.triangles.rows() == 0) throw std::invalid_argument("near_mesh: the mesh has no triangles");
+  if (points.cols() != 3) throw std::invalid_argument("near_mesh: points need 3 columns");
+  auto poly = to_vtk_polydata(PolyData{mesh.vertices, {}, mesh.triangles, {}}, Precision::kFloat64);
+  vtkNew<vtkStaticCellLocator> locator;
+  locator->SetDataSet(poly);
+  locator->BuildLocator();
+  Eigen::Array<bool, Eigen::Dynamic, 1> out(points.rows());
+#pragma omp parallel
+  {
+    vtkNew<vtkGenericCell> cell;
+#pragma omp for schedule(dynamic, 1024)
+    for (Eigen::Index i = 0; i < points.rows(); ++i) {
+      double x[3] = {points(i, 0), points(i, 1), points(i, 2)}, closest[3], dist2;
+      vtkIdType cell_id;
+      int sub_id;
+      out(i) = locator->FindClosestPointWithinRadius(x, radius, closest, cell, cell_id, sub_id, dist2) != 0;
+    }
+  }
+  return out;
+}
+
+Eigen::Array<bool, Eigen::Dynamic, 1> grid_near_mesh(const Grid& grid, const TriangleMesh& mesh, double radius) {
+  if (mesh.triangles.rows() == 0) throw std::invalid_argument("grid_near_mesh: the mesh has no triangles");
+  auto poly = to_vtk_polydata(PolyData{mesh.vertices, {}, mesh.triangles, {}}, Precision::kFloat64);
+  vtkNew<vtkStaticCellLocator> locator;
+  locator->SetDataSet(poly);
+  locator->BuildLocator();
+  struct Block {
+    std::array<int, 3> first, count;  // grid indices [first, first + count) per axis
+  };
+  Eigen::Array<bool, Eigen::Dynamic, 1> out =
+      Eigen::Array<bool, Eigen::Dynamic, 1>::Constant(grid.point_count(), false);
+  const auto fill = [&](const Block& b, bool value) {
+    for (int k = b.first[2]; k < b.first[2] + b.count[2]; ++k)
+      for (int j = b.first[1]; j < b.first[1] + b.count[1]; ++j)
+        for (int i = b.first[0]; i < b.first[0] + b.count[0]; ++i)
+          out(i + static_cast<Eigen::Index>(grid.dims[0]) * (j + static_cast<Eigen::Index>(grid.dims[1]) * k)) = value;
+  };
+  // Blocks of 16³ points to start with.
+  std::vector<Block> blocks;
+  for (int k = 0; k < grid.dims[2]; k += 16)
+    for (int j = 0; j < grid.dims[1]; j += 16)
+      for (int i = 0; i < grid.dims[0]; i += 16)
+        blocks.push_back({{i, j, k},
+                          {std::min(16, grid.dims[0] - i), std::min(16, grid.dims[1] - j), std::min(16, grid.dims[2] - k)}});
+  while (!blocks.empty()) {
+    std::vector<std::vector<Block>> split(blocks.size());
+#pragma omp parallel
+    {
+      vtkNew<vtkGenericCell> cell;
+#pragma omp for schedule(dynamic, 16)
+      for (long b = 0; b < static_cast<long>(blocks.size()); ++b) {
+        const Block& block = blocks[b];
+        double centre[3], half_diagonal2 = 0;
+        for (int a = 0; a < 3; ++a) {
+          const double extent = (block.count[a] - 1) * grid.spacing[a];
+          centre[a] = grid.origin[a] + block.first[a] * grid.spacing[a] + 0.5 * extent;
+          half_diagonal2 += 0.25 * extent * extent;
+        }
+        const double reach = std::sqrt(half_diagonal2);
+        double closest[3], dist2;
+        vtkIdType cell_id;
+        int sub_id;
+        // Nothing within radius + reach: the whole block is far.
+        if (!locator->FindClosestPointWithinRadius(centre, radius + reach, closest, cell, cell_id, sub_id, dist2))
+          continue;
+        const double d = std::sqrt(dist2);
+        if (reach == 0) {
+          if (d < radius) fill(block, true);
+        } else if (d + reach < radius) {
+          fill(block, true);
+        } else if (d - reach <= radius) {
+          // Split each axis of more than one point in two.
+          const std::array<int, 3> half{block.count[0] / 2, block.count[1] / 2, block.count[2] / 2};
+          for (int c = 0; c < 8; ++c) {
+            Block child = block;
+            bool empty = false;
+            for (int a = 0; a < 3; ++a) {
+              const bool upper = (c >> a) & 1;
+              if (block.count[a] == 1) {
+                empty = empty || upper;
+                continue;
+              }
+              child.first[a] = block.first[a] + (upper ? half[a] : 0);
+              child.count[a] = upper ? block.count[a] - half[a] : half[a];
+            }
+            if (!empty) split[b].push_back(child);
+          }
+        }
+      }
+    }
+    blocks.clear();
+    for (const auto& children : split) blocks.insert(blocks.end(), children.begin(), children.end());
   }
   return out;
 }

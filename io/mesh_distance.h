@@ -12,6 +12,7 @@
 
 #include <Eigen/Core>
 
+#include "io/grid.h"
 #include "io/triangle_mesh.h"
 
 namespace nfield::io {
@@ -31,6 +32,18 @@ Eigen::VectorXd point_cloud_distance(const Eigen::MatrixXd& points, const Eigen:
 
 // Unit normals of the triangles (right-handed in their vertex order; zero for degenerate ones).
 Eigen::MatrixXd triangle_normals(const TriangleMesh& mesh);
+
+// Whether each row of `points` lies within `radius` of `mesh` (vtkStaticCellLocator's search
+// within a radius, which is quick for points far from the mesh).
+Eigen::Array<bool, Eigen::Dynamic, 1> near_mesh(const Eigen::MatrixXd& points, const TriangleMesh& mesh,
+                                                double radius);
+
+// near_mesh for the points of a 3D grid, in grid order, found by blocks: a block of points
+// whose centre is farther from the mesh than `radius` plus the block's half-diagonal is far
+// as a whole, one nearer than `radius` minus it is near as a whole, and any other is split
+// into eight until single points are queried. Only the blocks along the radius's level set
+// are split, so a 256³ grid takes seconds where a query per point takes minutes.
+Eigen::Array<bool, Eigen::Dynamic, 1> grid_near_mesh(const Grid& grid, const TriangleMesh& mesh, double radius);
 
 // closest_triangles(points, mesh).distance.
 Eigen::VectorXd mesh_distance(const Eigen::MatrixXd& points, const TriangleMesh& mesh);

@@ -57,7 +57,8 @@
 //             input normals against the surface's) and chamfer_seconds (their cost);
 //             with reference_mesh also
 //             sign_accuracy (the fraction of output grid points where sign(u) agrees with
-//             inside (−)/outside (+) of the reference mesh, from VTK's implicit signed distance)
+//             inside (−)/outside (+) of the reference mesh, by the parity of crossings along
+//             grid lines: io/inside_mesh.h; the mesh must be closed)
 //             and sign_accuracy_band (the same over the grid points closer to the reference
 //             surface than 5% of its bounding-box diagonal), and sign_seconds.
 #include <algorithm>
@@ -68,13 +69,9 @@
 #include <limits>
 #include <unordered_map>
 
-#include <vtkCellArray.h>
-#include <vtkImplicitPolyDataDistance.h>
-#include <vtkNew.h>
-#include <vtkPoints.h>
-#include <vtkPolyData.h>
 
 #include "io/grid.h"
+#include "io/inside_mesh.h"
 #include "io/isosurface.h"
 #include "io/mesh_distance.h"
 #include "io/surface_components.h"
@@ -114,48 +111,6 @@ Domain sdf_domain(const io::ConfigNode& root) {
   return domain;
 }
 
-// Signed distances to a closed mesh (negative inside), whatever the winding of its triangles,
-// for the points within `reach` of the mesh's bounding box; farther points get +inf (outside).
-Eigen::VectorXd signed_mesh_distance(const Eigen::MatrixXd& points, const io::TriangleMesh& mesh,
-                                     double reach) {
-  vtkNew<vtkPoints> vertices;
-  vertices->SetDataTypeToDouble();
-  vertices->SetNumberOfPoints(mesh.vertices.rows());
-  for (Eigen::Index i = 0; i < mesh.vertices.rows(); ++i)
-    vertices->SetPoint(i, mesh.vertices(i, 0), mesh.vertices(i, 1), mesh.vertices(i, 2));
-  vtkNew<vtkCellArray> cells;
-  for (Eigen::Index i = 0; i < mesh.triangles.rows(); ++i) {
-    const vtkIdType ids[3] = {mesh.triangles(i, 0), mesh.triangles(i, 1), mesh.triangles(i, 2)};
-    cells->InsertNextCell(3, ids);
-  }
-  vtkNew<vtkPolyData> poly;
-  poly->SetPoints(vertices);
-  poly->SetPolys(cells);
-  const Eigen::RowVector3d lo = mesh.vertices.colwise().minCoeff().array() - reach;
-  const Eigen::RowVector3d hi = mesh.vertices.colwise().maxCoeff().array() + reach;
-  Eigen::VectorXd out = Eigen::VectorXd::Constant(points.rows(), std::numeric_limits<double>::infinity());
-  double orientation = 1;
-#pragma omp parallel
-  {
-    // One evaluator (and cell locator) per thread: EvaluateFunction is not thread-safe.
-    vtkNew<vtkImplicitPolyDataDistance> distance;
-#pragma omp critical
-    distance->SetInput(poly);
-#pragma omp single
-    {
-      // A point beyond the bounding box is outside: fix the sign convention with it.
-      double probe[3] = {hi(0) + 1 + (hi - lo).norm(), hi(1), hi(2)};
-      orientation = distance->EvaluateFunction(probe) < 0 ? -1.0 : 1.0;
-    }
-#pragma omp for schedule(dynamic, 4096)
-    for (Eigen::Index i = 0; i < points.rows(); ++i) {
-      if ((points.row(i).array() < lo.array()).any() || (points.row(i).array() > hi.array()).any()) continue;
-      double x[3] = {points(i, 0), points(i, 1), points(i, 2)};
-      out(i) = orientation * distance->EvaluateFunction(x);
-    }
-  }
-  return out;
-}
 
 class Sdf final : public Problem {
  public:
@@ -323,12 +278,20 @@ class Sdf final : public Problem {
     const double band = 0.05 * (reference_->vertices.colwise().maxCoeff() -
                                 reference_->vertices.colwise().minCoeff()).norm();
     const auto sign_started = std::chrono::steady_clock::now();
-    const Eigen::VectorXd reference = signed_mesh_distance(to_original(x), *reference_, band);
+    // The grid in the mesh's coordinates (to_original is a shift and a uniform scale).
+    io::Grid original = grid;
+    const Eigen::RowVector3d origin = to_original(Eigen::RowVector3d(grid.origin[0], grid.origin[1], grid.origin[2]));
+    for (int a = 0; a < 3; ++a) {
+      original.origin[a] = origin(a);
+      original.spacing[a] = grid.spacing[a] / (normalize_ ? scale_ : 1.0);
+    }
+    const auto inside = io::inside_closed_mesh(original, *reference_);
+    const auto near_surface = io::grid_near_mesh(original, *reference_, band);
     Eigen::Index agree = 0, near = 0, near_agree = 0;
     for (Eigen::Index p = 0; p < n; ++p) {
-      const bool same = (u(p) < 0) == (reference(p) < 0);
+      const bool same = (u(p) < 0) == inside(p);
       agree += same;
-      if (std::abs(reference(p)) < band) {
+      if (near_surface(p)) {
         ++near;
         near_agree += same;
       }

@@ -11,8 +11,13 @@
 
 #include <gtest/gtest.h>
 #include <Eigen/Geometry>
+#include <vtkImplicitPolyDataDistance.h>
+#include <vtkNew.h>
+#include <vtkPolyData.h>
 
+#include "io/inside_mesh.h"
 #include "io/mesh_distance.h"
+#include "io/vtk_convert.h"
 #include "io/surface_components.h"
 #include "tests/io/io_test_paths.h"
 
@@ -186,6 +191,62 @@ TEST(Isosurface, PointCloudDistanceIsTheNearestPoint) {
   for (Eigen::Index i = 0; i < points.rows(); ++i)
     EXPECT_DOUBLE_EQ(d(i), std::sqrt((cloud.rowwise() - points.row(i)).rowwise().squaredNorm().minCoeff())) << i;
   EXPECT_THROW(point_cloud_distance(points, Eigen::MatrixXd(0, 3)), std::invalid_argument);
+}
+
+// Inside a closed mesh by crossing parity: the icosphere of radius 0.5 (flat faces up to
+// 0.008 inside the sphere) holds the grid points with r < 0.49 and none with r > 0.5; the
+// bunny agrees with VTK's implicit signed distance wherever that is not within 1e-3 of 0.
+TEST(Isosurface, InsideClosedMesh) {
+  const TriangleMesh sphere = read_triangle_mesh(data_path("meshes/sphere.ply"));
+  const Grid grid = make_grid({-0.7, -0.6, -0.65}, {0.7, 0.6, 0.65}, {41, 37, 29});
+  const auto inside = inside_closed_mesh(grid, sphere);
+  const Eigen::VectorXd r = grid.points(3).rowwise().norm();
+  Eigen::Index count = 0;
+  for (Eigen::Index p = 0; p < r.size(); ++p) {
+    if (r(p) < 0.49) EXPECT_TRUE(inside(p)) << p;
+    if (r(p) > 0.5) EXPECT_FALSE(inside(p)) << p;
+    count += inside(p);
+  }
+  EXPECT_GT(count, 0);
+
+  const TriangleMesh bunny = read_triangle_mesh(data_path("meshes/bunny00.ply"));
+  const Eigen::RowVector3d lo = bunny.vertices.colwise().minCoeff(), hi = bunny.vertices.colwise().maxCoeff();
+  const Grid box = make_grid({lo(0) - 0.01, lo(1) - 0.01, lo(2) - 0.01}, {hi(0) + 0.01, hi(1) + 0.01, hi(2) + 0.01},
+                             {23, 21, 19});
+  const auto in_bunny = inside_closed_mesh(box, bunny);
+  vtkNew<vtkImplicitPolyDataDistance> distance;
+  distance->SetInput(to_vtk_polydata(PolyData{bunny.vertices, {}, bunny.triangles, {}}, Precision::kFloat64));
+  double outside_probe[3] = {hi(0) + 10, hi(1), hi(2)};
+  const double orientation = distance->EvaluateFunction(outside_probe) < 0 ? -1.0 : 1.0;
+  const Eigen::MatrixXd x = box.points(3);
+  Eigen::Index compared = 0, inside_count = 0;
+  for (Eigen::Index p = 0; p < x.rows(); ++p) {
+    double q[3] = {x(p, 0), x(p, 1), x(p, 2)};
+    const double d = orientation * distance->EvaluateFunction(q);
+    if (std::abs(d) < 1e-3) continue;
+    ++compared;
+    inside_count += d < 0;
+    EXPECT_EQ(in_bunny(p), d < 0) << "point " << p << ", signed distance " << d;
+  }
+  EXPECT_GT(compared, 8000);
+  EXPECT_GT(inside_count, 1000);
+}
+
+TEST(Isosurface, NearMesh) {
+  const TriangleMesh sphere = read_triangle_mesh(data_path("meshes/sphere.ply"));
+  Eigen::MatrixXd p(4, 3);
+  p << 0, 0, 0, 0.55, 0, 0, 0.62, 0, 0, 0, 0, 0.45;
+  const auto near = near_mesh(p, sphere, 0.1);
+  const Eigen::VectorXd d = mesh_distance(p, sphere);
+  for (Eigen::Index i = 0; i < 4; ++i) EXPECT_EQ(near(i), d(i) < 0.1) << i << ": " << d(i);
+  // By blocks on a grid: the same answer as a query per point, for every point.
+  const Grid grid = make_grid({-0.8, -0.7, -0.75}, {0.8, 0.7, 0.75}, {45, 37, 40});
+  const Eigen::MatrixXd x = grid.points(3);
+  const auto by_blocks = grid_near_mesh(grid, sphere, 0.12);
+  const auto per_point = near_mesh(x, sphere, 0.12);
+  EXPECT_EQ((by_blocks != per_point).count(), 0);
+  EXPECT_GT(by_blocks.count(), 1000);
+  EXPECT_LT(by_blocks.count(), x.rows() / 2);
 }
 
 TEST(Isosurface, Errors) {

@@ -5,6 +5,7 @@
 // wrong ones, and a tiny training run learns a standing wave.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -13,6 +14,9 @@
 #include <numbers>
 #include <string>
 
+#include <nlohmann/json.hpp>
+
+#include "io/vtk_image.h"
 #include "solvers/run.h"
 #include "solvers/training/trainer.h"
 #include "tests/testing/scratch.h"
@@ -312,6 +316,87 @@ training:
   const double rel_l2 = (u - exact).norm() / exact.norm();
   std::printf("tiny wave run: rel_l2 %.3e in %.1f s\n", rel_l2, wall);
   EXPECT_LT(rel_l2, 5e-2);
+}
+
+// `equation.reference`: the finite-difference reference replaces `exact` in the metrics, frame
+// by frame. It matches the standing mode it should reproduce, and a tiny run's errors per
+// frame land in metrics.json and in the field data of each frame's .vti.
+constexpr const char* kReferenceRun = R"yaml(
+problem: wave
+domain: {lower: [0], upper: [1], time: [0, 0.5]}
+equation:
+  speed: 2
+  reference: {cells: 1024}
+conditions:
+  - {on: boundary, type: dirichlet, value: "0", weight: 100}
+  - {on: initial, type: value, value: "sin(pi*x)", weight: 100}
+  - {on: initial, type: velocity, value: "0", weight: 100}
+field: {type: siren, hidden: [16, 16], first_omega: 3, hidden_omega: 1}
+training:
+  seed: 1
+  batch: {interior: 128, boundary: 32, initial: 32}
+  stages:
+    - {optimizer: adam, steps: 100, lr: 1.0e-2, schedule: cosine, lr_final: 1.0e-4}
+    - {optimizer: lbfgs, steps: 200, memory: 50}
+output: {grid: [64], frames: 5, png: false}
+)yaml";
+
+TEST(Wave, ReferenceGivesErrorsPerFrame) {
+  const std::filesystem::path out = testutil::scratch_dir("wave") / "reference_out";
+  std::filesystem::remove_all(out);
+  RunSetup setup = load_run(write_config("reference", kReferenceRun), {}, out);
+  ASSERT_TRUE(setup.problem->has_exact());
+  Eigen::MatrixXd x(50 * 7, 2);
+  for (int k = 0; k < 7; ++k)
+    for (int i = 0; i < 50; ++i) x.row(k * 50 + i) << (i + 0.3) / 50.0, 0.5 * (k + 0.1) / 7.0;
+  Eigen::VectorXd mode(x.rows());
+  for (Eigen::Index r = 0; r < x.rows(); ++r) mode(r) = std::sin(kPi * x(r, 0)) * std::cos(2 * kPi * x(r, 1));
+  EXPECT_LT((setup.problem->exact(x).col(0) - mode).cwiseAbs().maxCoeff(), 1e-4);
+
+  ASSERT_EQ(execute_run(setup), 0);
+  std::ifstream file(out / "metrics.json");
+  const nlohmann::json metrics = nlohmann::json::parse(file);
+  const auto frames = metrics["frame_rel_l2"].get<std::vector<double>>();
+  const auto times = metrics["frame_times"].get<std::vector<double>>();
+  ASSERT_EQ(frames.size(), 5u);
+  ASSERT_EQ(times.size(), 5u);
+  EXPECT_DOUBLE_EQ(times[4], 0.5);
+  EXPECT_DOUBLE_EQ(metrics["max_frame_rel_l2"].get<double>(), *std::max_element(frames.begin(), frames.end()));
+  EXPECT_LT(metrics["rel_l2"].get<double>(), 5e-2);
+  for (int k = 0; k < 5; ++k) {
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%04d.vti", k);
+    const io::ImageData image = io::read_vti(out / name);
+    ASSERT_EQ(image.field_data.count("rel_l2"), 1u) << name;
+    EXPECT_DOUBLE_EQ(image.field_data.at("rel_l2"), frames[k]) << name;
+  }
+  std::filesystem::remove_all(out);
+}
+
+TEST(Wave, ReferenceConfigErrors) {
+  const std::string base = kReferenceRun;
+  const auto rejects = [&](const std::string& name, const std::string& from, const std::string& to,
+                           const std::string& message) {
+    std::string text = base;
+    const auto at = text.find(from);
+    ASSERT_NE(at, std::string::npos) << from;
+    text.replace(at, from.size(), to);
+    try {
+      load_run(write_config(name, text), {});
+      ADD_FAILURE() << name << ": expected a ConfigError";
+    } catch (const io::ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << name << ": " << e.what();
+    }
+  };
+  rejects("both", "reference: {cells: 1024}", "reference: finite_difference\n  exact: \"0\"", "not both");
+  rejects("method", "reference: {cells: 1024}", "reference: spectral", "reference");
+  rejects("cells", "cells: 1024", "cells: 2", "cells");
+  rejects("cfl", "cells: 1024", "cfl: 1.5", "cfl");
+  rejects("key", "cells: 1024", "cels: 1024", "cels");
+  rejects("face", "on: boundary, type: dirichlet", "on: x_min, type: dirichlet", "x_max has none");
+  rejects("velocity", "  - {on: initial, type: velocity, value: \"0\", weight: 100}\n", "", "initial velocity");
+  rejects("twice", "  - {on: initial, type: velocity",
+          "  - {on: x_max, type: neumann, value: \"0\"}\n  - {on: initial, type: velocity", "x_max has a condition");
 }
 
 }  // namespace
