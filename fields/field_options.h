@@ -18,6 +18,7 @@
 #pragma once
 
 #include <cstdint>
+#include <any>
 #include <string>
 #include <vector>
 
@@ -38,6 +39,11 @@ struct FieldOptions {
   std::vector<int> color_hidden{64};  // nerf: widths of the colour layers
   int direction_frequencies = 4;      // nerf: octaves of the view direction's encoding
   std::uint64_t seed = 0;             // initial weights
+  // A field type's own options beyond those above, as the type's own typed struct: an outside
+  // type (fields/field_type.h) sets it in FieldType::read and load, and reads it back with
+  // std::any_cast in append_modules, initial_bounds, validate, write and save. Empty for the
+  // built-in types.
+  std::any extension;
 
   // Throws std::invalid_argument naming the field, its value and the rule.
   void validate() const;

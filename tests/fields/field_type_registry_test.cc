@@ -5,6 +5,7 @@
 // kept through a checkpoint; taken names are refused and an unknown type lists the valid ones.
 #include <gtest/gtest.h>
 
+#include <any>
 #include <stdexcept>
 #include <string>
 
@@ -21,7 +22,19 @@
 namespace nfield::fields {
 namespace {
 
-// x → Dense → σ → Dense with σ softplus by default and the width given as `width`.
+// The type's own options, beside FieldOptions (FieldOptions::extension).
+struct ShallowOptions {
+  double gain = 1;  // scales the initial weights of the output layer
+};
+
+const ShallowOptions& shallow_options(const FieldOptions& o) {
+  static const ShallowOptions defaults;
+  const auto* own = std::any_cast<ShallowOptions>(&o.extension);
+  return own ? *own : defaults;
+}
+
+// x → Dense → σ → Dense with σ softplus by default, the width given as `width` and the output
+// layer's initial weights scaled by its own key `gain`.
 class ShallowType final : public FieldTypeOf<ShallowType> {
  public:
   std::string default_activation() const override { return "softplus"; }
@@ -38,15 +51,29 @@ class ShallowType final : public FieldTypeOf<ShallowType> {
     network.add(std::make_unique<Dense<Scalar>>(o.hidden[0], o.output_dim));
     return nullptr;
   }
+  InitialBounds initial_bounds(const FieldOptions& o, int index, Eigen::Index in, Eigen::Index out) const override {
+    InitialBounds bounds = FieldType::initial_bounds(o, index, in, out);
+    if (index == 1) bounds.weight *= shallow_options(o).gain;
+    return bounds;
+  }
   void read(const io::ConfigNode& node, FieldOptions& o) const override {
     o.hidden = {node.get_in_range("width", 1, 4096)};
+    ShallowOptions own;
+    own.gain = node.get_or("gain", own.gain);
+    node.require("gain", own.gain >= 0, "expected a gain >= 0");
+    o.extension = own;
   }
-  void write(const FieldOptions& o, YAML::Node& n) const override { n["width"] = o.hidden[0]; }
+  void write(const FieldOptions& o, YAML::Node& n) const override {
+    n["width"] = o.hidden[0];
+    n["gain"] = shallow_options(o).gain;
+  }
   void save(io::H5Writer& file, const std::string& group, const FieldOptions& o) const override {
     file.write_attribute(group, "shallow_width", static_cast<std::int64_t>(o.hidden[0]));
+    file.write_attribute(group, "shallow_gain", shallow_options(o).gain);
   }
   void load(const io::H5Reader& file, const std::string& group, FieldOptions& o) const override {
     EXPECT_EQ(file.read_attribute<std::int64_t>(group, "shallow_width"), o.hidden[0]);
+    o.extension = ShallowOptions{file.read_attribute<double>(group, "shallow_gain")};
   }
 };
 
@@ -83,8 +110,29 @@ TEST(FieldTypeRegistry, TypeFromOutsideIsBuiltFromAConfig) {
   const YAML::Node written = to_yaml(options, {"x", "y"});
   EXPECT_EQ(written["type"].as<std::string>(), "shallow");
   EXPECT_EQ(written["width"].as<int>(), 12);
+  EXPECT_EQ(written["gain"].as<double>(), 1.0);
   EXPECT_EQ(written["activation"].as<std::string>(), "softplus");
   EXPECT_FALSE(written["color_hidden"]);
+}
+
+// A key of the type's own (`gain`, in FieldOptions::extension) reaches the network: gain 0
+// zeroes the output layer's initial weights, so the field starts at its bias, 0.
+TEST(FieldTypeRegistry, TypeOwnKeyReachesTheNetwork) {
+  register_shallow();
+  const FieldOptions options = from_text("{type: shallow, width: 6, gain: 0}");
+  EXPECT_EQ(shallow_options(options).gain, 0.0);
+  const Field<double> field(options);
+  EXPECT_EQ(field.values(Eigen::MatrixXd::Random(5, 2)).cwiseAbs().maxCoeff(), 0.0);
+  const Field<double> half(from_text("{type: shallow, width: 6, gain: 0.5}"));
+  const Field<double> full(from_text("{type: shallow, width: 6}"));
+  const Eigen::MatrixXd x = Eigen::MatrixXd::Random(5, 2);
+  EXPECT_NEAR((half.values(x) - 0.5 * full.values(x)).cwiseAbs().maxCoeff(), 0.0, 1e-12);
+  try {
+    from_text("{type: shallow, width: 6, gain: -1}");
+    ADD_FAILURE() << "no error";
+  } catch (const io::ConfigError& e) {
+    EXPECT_EQ(e.key_path(), "field.gain") << e.what();
+  }
 }
 
 TEST(FieldTypeRegistry, TypeKeysAreReadStrictly) {
@@ -105,7 +153,7 @@ TEST(FieldTypeRegistry, TypeKeysAreReadStrictly) {
 
 TEST(FieldTypeRegistry, CheckpointKeepsTheType) {
   register_shallow();
-  const Field<float> field(from_text("{type: shallow, width: 5, activation: tanh}"));
+  const Field<float> field(from_text("{type: shallow, width: 5, activation: tanh, gain: 0.25}"));
   const auto path = testutil::scratch_dir("field_type_registry") / "shallow.h5";
   {
     io::H5Writer file(path);
@@ -116,6 +164,7 @@ TEST(FieldTypeRegistry, CheckpointKeepsTheType) {
   const Field<float> loaded = load_field<float>(file, "field");
   EXPECT_EQ(loaded.options().type, "shallow");
   EXPECT_EQ(loaded.options().activation, "tanh");
+  EXPECT_EQ(shallow_options(loaded.options()).gain, 0.25);
   EXPECT_EQ(loaded.parameters(), field.parameters());
 }
 
