@@ -98,8 +98,7 @@ FrameTiming time_frame(const solvers::RunSetup& setup, const fields::Field<float
     integrators::PixelBatch<double> all = integrators::frame_pixels<double>(views, 0);
     integrators::Rays<double> rays = all.rays;
     if (stride > 1)
-      rays = {all.rays.origins(kept, Eigen::all), all.rays.directions(kept, Eigen::all),
-              all.rays.depth_scale(kept), all.rays.near(kept), all.rays.far(kept)};
+      rays = all.rays.subset(kept);
     integrators::clip_to_box(rays, box, near);
     std::mt19937_64 unused(0);
     const auto samples = integrators::stratified_samples(rays, {samples_per_ray, false}, unused);
