@@ -20,7 +20,7 @@
 //                        distance, so that the cone's cross-section has the variance of the
 //                        pixel's square (a disc of radius ρ has ρ²/4 per axis, a square of side
 //                        w has w²/12). 0: a ray of no width. Only the frustum Gaussians read
-//                        it (cone_frustums.h).
+//                        it (cone_frustums.h), which refuse rays without it (empty).
 //
 // Scalar is float for training (the default for radiance fields) or double for tests.
 #pragma once
@@ -78,11 +78,12 @@ struct Rays {
             far.template cast<Other>(), radius.template cast<Other>()};
   }
 
-  // Rays `rows` of these (an index list or Eigen::all).
+  // Rays `rows` of these (an index list or an Eigen sequence). Rays filled member by member
+  // without resize may leave `radius` empty; their subset's is empty too.
   template <typename Rows>
   Rays subset(const Rows& rows) const {
     return {origins(rows, Eigen::all), directions(rows, Eigen::all), depth_scale(rows), near(rows),
-            far(rows), radius(rows)};
+            far(rows), radius.size() == 0 ? Vector<Scalar>() : Vector<Scalar>(radius(rows))};
   }
 };
 
