@@ -335,10 +335,14 @@ RunSetup setup_run(io::ConfigNode root, const std::filesystem::path& config,
                                        "' reads a variance beside each coordinate, and problem '" +
                                        s.root.get<std::string>("problem") +
                                        "' gives none (problem: nerf does: each sample's frustum)");
+    const int coordinates = s.problem->field_input_dim();
     s.problem->give_input_variances();
-    if (s.problem->field_input_dim() != s.field.input_dim)
-      throw std::logic_error("problem gives " + std::to_string(s.problem->field_input_dim()) +
-                             " inputs with variances, the field takes " + std::to_string(s.field.input_dim));
+    const int given = s.problem->field_input_dim() - coordinates;
+    if (s.field.input_dim - coordinates != given)
+      throw encoding.error("type", "'" + s.field.encoding.type + "' on a '" + s.field.type + "' field reads " +
+                                       std::to_string(s.field.input_dim - coordinates) + " variances, problem '" +
+                                       s.root.get<std::string>("problem") + "' gives " + std::to_string(given) +
+                                       " (one per position coordinate: use field.type: nerf)");
   }
   // Encodings that map the domain onto a grid (hash_grid) need its box; saved with the field.
   const Eigen::VectorXd lower = s.problem->domain().input_lower();

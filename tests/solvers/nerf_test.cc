@@ -198,6 +198,11 @@ TEST(Nerf, IntegratedPositionalConfigErrorsAreLocated) {
         "1");
   check(with_encoding(nerf, "{type: integrated_positional, normalize: true}"), "normalize",
         "field.encoding.normalize", "unknown key 'normalize'");
+  // A radiance problem gives a variance per position coordinate; an mlp over [x, d] would read six.
+  std::string mlp = with_encoding(nerf, "{type: integrated_positional}");
+  const std::string nerf_field = "type: nerf, hidden: [32, 32], color_hidden: [16],";
+  mlp.replace(mlp.find(nerf_field), nerf_field.size(), "type: mlp, hidden: [32, 32],");
+  check(mlp, "integrated_positional", "field.encoding.type", "use field.type: nerf");
   // A problem without variances (Poisson's points are bare coordinates).
   const std::string poisson =
       "problem: poisson\n"
