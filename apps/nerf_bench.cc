@@ -12,6 +12,7 @@
 
 #include "apps/gemm_rate.h"
 #include "fields/field.h"
+#include "integrators/cone_frustums.h"
 #include "integrators/multiview_dataset.h"
 #include "integrators/ray_batch.h"
 #include "integrators/ray_sampling.h"
@@ -98,13 +99,18 @@ FrameTiming time_frame(const solvers::RunSetup& setup, const fields::Field<float
     integrators::PixelBatch<double> all = integrators::frame_pixels<double>(views, 0);
     integrators::Rays<double> rays = all.rays;
     if (stride > 1)
-      rays = {all.rays.origins(kept, Eigen::all), all.rays.directions(kept, Eigen::all),
-              all.rays.depth_scale(kept), all.rays.near(kept), all.rays.far(kept)};
+      rays = all.rays.subset(kept);
     integrators::clip_to_box(rays, box, near);
     std::mt19937_64 unused(0);
     const auto samples = integrators::stratified_samples(rays, {samples_per_ray, false}, unused);
-    Eigen::MatrixXd x(samples.size(), 6);
-    x << integrators::sample_points(rays, samples), integrators::sample_directions(rays, samples);
+    // [x, d], or [mean, d, σ²] of the samples' frustums for an encoding that reads variances.
+    Eigen::MatrixXd x(samples.size(), setup.field.input_dim);
+    if (setup.field.input_dim == 6) {
+      x << integrators::sample_points(rays, samples), integrators::sample_directions(rays, samples);
+    } else {
+      const integrators::SampleGaussians<double> gaussians = integrators::sample_gaussians(rays, samples);
+      x << gaussians.mean, integrators::sample_directions(rays, samples), gaussians.variance;
+    }
     const Eigen::MatrixXd out = field.values(x.cast<float>()).cast<double>();
     const Eigen::VectorXd sigma = out.col(0).unaryExpr([truncated_exp](double s) {
       if (truncated_exp) return std::exp(std::min(s, 15.0));

@@ -174,6 +174,83 @@ void elementwise_backward(const StreamLayout& layout, const std::vector<Matrix<S
     }
 }
 
+namespace {
+
+// Stream index of Taylor coefficient m along direction p; m = 0 is the value.
+int taylor_stream(const StreamLayout& layout, int p, int m) { return m == 0 ? 0 : layout.taylor(p, m); }
+
+}  // namespace
+
+template <typename Scalar>
+void product_forward(const StreamLayout& layout, const Streams<Scalar>& a, const Streams<Scalar>& b,
+                     Streams<Scalar>& y) {
+  if (a.width() != b.width() || a.points != b.points || a.count != b.count)
+    throw std::logic_error("product_forward: the factors' streams differ in shape");
+  y.resize(a.points, a.count, a.width());
+  const auto a0 = a.stream(0).array();
+  const auto b0 = b.stream(0).array();
+  y.stream(0).array() = a0 * b0;
+  for (int i = 0; i < layout.tangents(); ++i) {
+    const int s = layout.tangent(i);
+    y.stream(s).array() = a.stream(s).array() * b0 + a0 * b.stream(s).array();
+  }
+  for (int q = 0; q < layout.operators(); ++q) {
+    const int s = layout.op(q);
+    auto yq = y.stream(s).array();
+    yq = a.stream(s).array() * b0 + a0 * b.stream(s).array();
+    for (const OperatorTerm& term : layout.terms(q)) {
+      const int i = layout.tangent(term.i), j = layout.tangent(term.j);
+      yq += Scalar(term.coefficient) *
+            (a.stream(i).array() * b.stream(j).array() + a.stream(j).array() * b.stream(i).array());
+    }
+  }
+  for (int p = 0; p < layout.taylor_dirs(); ++p)
+    for (int k = 1; k <= layout.taylor_order(); ++k) {
+      auto yk = y.stream(layout.taylor(p, k)).array();
+      yk = a0 * b.stream(layout.taylor(p, k)).array();
+      for (int m = 1; m <= k; ++m)
+        yk += a.stream(taylor_stream(layout, p, m)).array() * b.stream(taylor_stream(layout, p, k - m)).array();
+    }
+}
+
+template <typename Scalar>
+void product_backward(const StreamLayout& layout, const Streams<Scalar>& a, const Streams<Scalar>& b,
+                      const Streams<Scalar>& y_adjoint, Streams<Scalar>& a_adjoint,
+                      Streams<Scalar>& b_adjoint) {
+  a_adjoint.resize(a.points, a.count, a.width());
+  b_adjoint.resize(b.points, b.count, b.width());
+  a_adjoint.data.setZero();
+  b_adjoint.data.setZero();
+  // Every rule is a sum of products a_s b_t; each adds ȳ b_t to ā_s and ȳ a_s to b̄_t.
+  auto add = [&](const auto& y_bar, int s, int t, Scalar c) {
+    a_adjoint.stream(s).array() += c * y_bar * b.stream(t).array();
+    b_adjoint.stream(t).array() += c * y_bar * a.stream(s).array();
+  };
+  add(y_adjoint.stream(0).array(), 0, 0, Scalar(1));
+  for (int i = 0; i < layout.tangents(); ++i) {
+    const int s = layout.tangent(i);
+    const auto y_bar = y_adjoint.stream(s).array();
+    add(y_bar, s, 0, Scalar(1));
+    add(y_bar, 0, s, Scalar(1));
+  }
+  for (int q = 0; q < layout.operators(); ++q) {
+    const int s = layout.op(q);
+    const auto y_bar = y_adjoint.stream(s).array();
+    add(y_bar, s, 0, Scalar(1));
+    add(y_bar, 0, s, Scalar(1));
+    for (const OperatorTerm& term : layout.terms(q)) {
+      const int i = layout.tangent(term.i), j = layout.tangent(term.j);
+      add(y_bar, i, j, Scalar(term.coefficient));
+      add(y_bar, j, i, Scalar(term.coefficient));
+    }
+  }
+  for (int p = 0; p < layout.taylor_dirs(); ++p)
+    for (int k = 1; k <= layout.taylor_order(); ++k) {
+      const auto y_bar = y_adjoint.stream(layout.taylor(p, k)).array();
+      for (int m = 0; m <= k; ++m) add(y_bar, taylor_stream(layout, p, m), taylor_stream(layout, p, k - m), Scalar(1));
+    }
+}
+
 #define NFIELD_INSTANTIATE(Scalar)                                                           \
   template void elementwise_forward<Scalar>(const StreamLayout&,                             \
                                             const std::vector<Matrix<Scalar>>&,              \
@@ -181,7 +258,12 @@ void elementwise_backward(const StreamLayout& layout, const std::vector<Matrix<S
   template void elementwise_backward<Scalar>(const StreamLayout&,                            \
                                              const std::vector<Matrix<Scalar>>&,             \
                                              const Streams<Scalar>&, const Streams<Scalar>&, \
-                                             Streams<Scalar>&);
+                                             Streams<Scalar>&);      \
+  template void product_forward<Scalar>(const StreamLayout&, const Streams<Scalar>&,         \
+                                        const Streams<Scalar>&, Streams<Scalar>&);           \
+  template void product_backward<Scalar>(const StreamLayout&, const Streams<Scalar>&,        \
+                                         const Streams<Scalar>&, const Streams<Scalar>&,     \
+                                         Streams<Scalar>&, Streams<Scalar>&);
 NFIELD_INSTANTIATE(float)
 NFIELD_INSTANTIATE(double)
 #undef NFIELD_INSTANTIATE

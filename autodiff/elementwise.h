@@ -45,4 +45,25 @@ void elementwise_backward(const StreamLayout& layout, const std::vector<Matrix<S
                           const Streams<Scalar>& z, const Streams<Scalar>& y_adjoint,
                           Streams<Scalar>& z_adjoint);
 
+// The elementwise product y = a ⊙ b of two quantities of the same width, all streams
+// (Leibniz's rule; the integrated positional encoding multiplies sinusoids by damping
+// factors, fields/integrated_positional.h):
+//
+//   y⁰     = a⁰ b⁰
+//   y⁽ⁱ⁾   = a⁽ⁱ⁾ b⁰ + a⁰ b⁽ⁱ⁾
+//   y^[C]  = a^[C] b⁰ + a⁰ b^[C] + Σᵢⱼ Cᵢⱼ (a⁽ⁱ⁾ b⁽ʲ⁾ + a⁽ʲ⁾ b⁽ⁱ⁾)
+//   y_k    = Σ_{m=0..k} a_m b_{k−m}         (Taylor: the Cauchy product, a₀ = a⁰)
+//
+// The double sum runs over the layout's terms (i ≤ j, coefficient c = Cᵢⱼ + Cⱼᵢ off the
+// diagonal, Cᵢᵢ on it) as Σ c (a⁽ⁱ⁾ b⁽ʲ⁾ + a⁽ʲ⁾ b⁽ⁱ⁾): a diagonal term gives 2Cᵢᵢ a⁽ⁱ⁾ b⁽ⁱ⁾.
+template <typename Scalar>
+void product_forward(const StreamLayout& layout, const Streams<Scalar>& a, const Streams<Scalar>& b,
+                     Streams<Scalar>& y);
+
+// ā and b̄ (overwritten) from ȳ: the adjoint of product_forward.
+template <typename Scalar>
+void product_backward(const StreamLayout& layout, const Streams<Scalar>& a, const Streams<Scalar>& b,
+                      const Streams<Scalar>& y_adjoint, Streams<Scalar>& a_adjoint,
+                      Streams<Scalar>& b_adjoint);
+
 }  // namespace nfield::autodiff

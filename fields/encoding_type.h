@@ -38,6 +38,12 @@ class EncodingType {
   // Rules that need the input dimension d.
   virtual void validate_inputs(const EncodingOptions&, int /*input_dim*/) const {}
 
+  // Whether the encoding reads a variance beside each coordinate it encodes (its input is
+  // [μ₁ … μ_k, σ₁² … σ_k²], fields/integrated_positional.h): the field then takes one more
+  // input per encoded coordinate (FieldType::variance_inputs), which the problem must give
+  // (solvers::Problem::gives_input_variances).
+  virtual bool reads_variances() const { return false; }
+
   // Whether `from_stage` > 0 is allowed: features that enter at a later training stage
   // (fields/encodings.h).
   virtual bool can_enter_late() const { return false; }
@@ -82,5 +88,8 @@ class EncodingTypeOf : public EncodingType {
 
 // The registered type of `name` (case-insensitive); UnknownNameError otherwise.
 const EncodingType& encoding_type(std::string_view name);
+
+// encoding_type(options.type).reads_variances().
+bool reads_variances(const EncodingOptions& options);
 
 }  // namespace nfield::fields

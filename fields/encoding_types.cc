@@ -16,6 +16,7 @@
 #include "fields/encoding_type.h"
 #include "fields/encodings.h"
 #include "fields/hash_grid.h"
+#include "fields/integrated_positional.h"
 #include "io/registry.h"
 
 namespace nfield::fields {
@@ -229,6 +230,7 @@ const EncodingRegistry& encodings() {
     r.add("fourier", std::make_unique<FourierType>());
     r.add("cusp", std::make_unique<CuspType>());
     r.add("hash_grid", make_hash_grid_type());
+    r.add("integrated_positional", make_integrated_positional_type());
     return r;
   }();
   return registry;
@@ -239,6 +241,10 @@ const EncodingRegistry& encodings() {
 const EncodingType& encoding_type(std::string_view name) { return *encodings().at(name); }
 
 std::vector<std::string> encoding_names() { return encodings().names(); }
+
+bool reads_variances(const EncodingOptions& options) {
+  return encoding_type(options.type).reads_variances();
+}
 
 void EncodingOptions::validate() const {
   const EncodingType& kind = encoding_type(type);
@@ -251,11 +257,13 @@ void EncodingOptions::validate() const {
 
 void EncodingOptions::validate(int input_dim) const {
   validate();
-  if (lower.size() != upper.size() || (!lower.empty() && static_cast<int>(lower.size()) != input_dim))
+  // One bound per coordinate: variance columns have none.
+  const int coordinates = encoding_type(type).reads_variances() ? input_dim / 2 : input_dim;
+  if (lower.size() != upper.size() || (!lower.empty() && static_cast<int>(lower.size()) != coordinates))
     throw std::invalid_argument("encoding.lower/upper have " + std::to_string(lower.size()) + " and " +
                                 std::to_string(upper.size()) +
                                 " values: must both be empty or have one per input, " +
-                                std::to_string(input_dim));
+                                std::to_string(coordinates));
   for (size_t i = 0; i < lower.size(); ++i)
     if (!(std::isfinite(lower[i]) && std::isfinite(upper[i]) && lower[i] < upper[i]))
       reject("lower[" + std::to_string(i) + "]", std::to_string(lower[i]),

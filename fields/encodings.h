@@ -8,6 +8,8 @@
 //   cusp        γ(x) = [x, |x_a − c₁|, …, |x_a − c_k|] for planes x_a = c_k
 //   identity    γ(x) = x (no module)
 //   hash_grid   trainable multiresolution grids (Müller et al. 2022), fields/hash_grid.h
+//   integrated_positional  E[γ(x)] for x ~ N(μ, diag σ²): the positional encoding damped
+//               by e^{−½ω²σ²}, input [μ, σ²] (mip-NeRF; Barron 2021), fields/integrated_positional.h
 //
 // Each type is one entry of a registry (fields/encoding_type.h) that validates its options,
 // reads and writes its config keys and checkpoint attributes, and creates its module.
@@ -51,8 +53,8 @@ namespace nfield::fields {
 
 struct EncodingOptions {
   std::string type = "identity";  // a registered name (encoding_names())
-  int frequencies = 6;            // positional: L, frequencies 2⁰π … 2^(L−1)π per axis
-  bool include_input = true;      // positional, hash_grid: keep x itself in γ(x)
+  int frequencies = 6;            // positional, integrated_positional: L, frequencies 2⁰π … 2^(L−1)π per axis
+  bool include_input = true;      // positional, integrated_positional, hash_grid: keep x itself in γ(x)
   bool normalize = false;         // positional: octave l scaled by 2⁻ˡ (derivatives bounded)
   int features = 128;             // fourier: m
   double scale = 10.0;            // fourier: σ
@@ -67,7 +69,8 @@ struct EncodingOptions {
   int finest_resolution = 512;    // hash_grid: N_max on the finest level
   std::string interpolation = "linear";  // hash_grid: linear | smoothstep
   double init_scale = 1e-4;       // hash_grid: tables start U(−init_scale, init_scale)
-  // The box [lower, upper] the inputs come from (the field's domain), one bound per input;
+  // The box [lower, upper] the inputs come from (the field's domain), one bound per input
+  // (per coordinate, for an encoding that reads variances beside them);
   // both empty: [0, 1]^d. Set by the program from the problem's domain, not a config key;
   // saved with the field. Only hash_grid reads it.
   std::vector<double> lower, upper;

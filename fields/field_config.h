@@ -14,6 +14,7 @@
 //     encoding: {type: cusp, axis: y, at: [0.5], from_stage: 1}   # … from training stage 1
 //     encoding: {type: hash_grid, levels: 8, base_resolution: 4, finest_resolution: 64,
 //                interpolation: smoothstep}                       # fields/hash_grid.h
+//     encoding: {type: integrated_positional, frequencies: 10}   # mip-NeRF: inputs gain σ²
 //
 // Each encoding type reads and writes its own keys (EncodingType, fields/encoding_type.h).
 #pragma once

@@ -38,8 +38,13 @@ class FieldType {
   // The type's own rules of FieldOptions::validate; std::invalid_argument naming the option
   // ("field.KEY = VALUE: rule").
   virtual void validate(const FieldOptions&) const {}
-  // The inputs the encoding sees (a radiance field encodes the position, not the direction).
+  // The inputs the encoding sees (a radiance field encodes the position, not the direction),
+  // its variance columns included when it reads them (EncodingType::reads_variances).
   virtual int encoded_inputs(const FieldOptions& options) const { return options.input_dim; }
+  // The variance columns an encoding that reads variances adds to the problem's inputs, for
+  // options whose input_dim is still the problem's: one per encoded coordinate (a coordinate
+  // field [x] becomes [x, σ²]; a radiance field [x, d] becomes [x, d, σ²], 3 more).
+  virtual int variance_inputs(const FieldOptions& options) const { return options.input_dim; }
 
   // Appends the type's modules to `network` (empty on entry); options are validated, the
   // activation resolved. Returns the encoding whose features enter at a later stage

@@ -9,6 +9,7 @@
 #include "fields/activation_layer.h"
 #include "fields/activations.h"
 #include "fields/dense.h"
+#include "fields/encoding_type.h"
 #include "fields/field_type.h"
 #include "fields/radiance_network.h"
 #include "io/registry.h"
@@ -72,8 +73,13 @@ class NerfType final : public FieldTypeOf<NerfType> {
  public:
   std::string default_activation() const override { return "relu"; }
   void validate(const FieldOptions& o) const override {
-    if (o.input_dim != kRadianceInputs)
+    if (reads_variances(o.encoding)) {
+      if (o.input_dim != kRadianceInputs + 3)
+        reject("input_dim", std::to_string(o.input_dim),
+               "must be 9 for nerf with encoding " + o.encoding.type + " (position, direction, variances)");
+    } else if (o.input_dim != kRadianceInputs) {
       reject("input_dim", std::to_string(o.input_dim), "must be 6 for nerf (position, direction)");
+    }
     if (o.output_dim != kRadianceOutputs)
       reject("output_dim", std::to_string(o.output_dim), "must be 4 for nerf (density, r, g, b)");
     for (size_t i = 0; i < o.color_hidden.size(); ++i)
@@ -82,7 +88,8 @@ class NerfType final : public FieldTypeOf<NerfType> {
     if (o.direction_frequencies < 1 || o.direction_frequencies > 16)
       reject("direction_frequencies", std::to_string(o.direction_frequencies), "must be in [1, 16]");
   }
-  int encoded_inputs(const FieldOptions&) const override { return 3; }
+  int encoded_inputs(const FieldOptions& o) const override { return reads_variances(o.encoding) ? 6 : 3; }
+  int variance_inputs(const FieldOptions&) const override { return 3; }
   template <typename Scalar>
   static FeatureEncoding<Scalar>* append(const FieldOptions& o, autodiff::Sequential<Scalar>& network) {
     add_radiance_modules(o, network);

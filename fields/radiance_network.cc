@@ -2,8 +2,10 @@
 #include "fields/radiance_network.h"
 
 #include "autodiff/on_columns.h"
+#include "autodiff/permute_columns.h"
 #include "fields/activation_layer.h"
 #include "fields/dense.h"
+#include "fields/encoding_type.h"
 #include "fields/encodings.h"
 
 namespace nfield::fields {
@@ -24,7 +26,12 @@ void add_radiance_modules(const FieldOptions& options, autodiff::Sequential<Scal
   constexpr Eigen::Index kCarried = 3;  // d, through the trunk
   const ActivationSpec activation{options.activation, options.hidden_omega};
   Eigen::Index width = 3;  // the columns the next trunk module reads; d follows them
-  if (auto encoding = make_encoding<Scalar>(options.encoding, 3)) {
+  if (reads_variances(options.encoding)) {
+    // [x, d, σ²] → [x, σ², d]: the encoding reads the means and variances together.
+    network.add(std::make_unique<autodiff::PermuteColumns<Scalar>>(std::vector<Eigen::Index>{0, 1, 2, 6, 7, 8, 3, 4, 5}));
+    width = 6;
+  }
+  if (auto encoding = make_encoding<Scalar>(options.encoding, static_cast<int>(width))) {
     const Eigen::Index encoded = encoding->output_width();
     add_on<Scalar>(network, std::move(encoding), 0, width + kCarried);
     width = encoded;

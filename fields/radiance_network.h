@@ -2,7 +2,10 @@
 //
 // The network of a radiance field (NeRF, Mildenhall et al. 2020) as one chain of modules.
 //
-//   input   [x (3), d (3)]: a sample's position and its ray's unit direction
+//   input   [x (3), d (3)]: a sample's position and its ray's unit direction; with an
+//           encoding that reads variances (integrated_positional) [x (3), d (3), σ² (3)],
+//           σ² the diagonal of the covariance of the sample's Gaussian (world axes), moved
+//           next to x for the encoding (autodiff/permute_columns.h)
 //   trunk   γ(x) → [Dense → σ] × H             (σ = `activation`, relu by default)
 //   heads   Dense → [s, f]                      raw density s and a feature vector f (width of
 //                                               the last trunk layer): two heads, one product

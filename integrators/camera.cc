@@ -64,6 +64,10 @@ void set_ray(const Camera& camera, double u, double v, Rays<Scalar>& rays, Eigen
   rays.origins.row(row) = camera.centre().transpose().cast<Scalar>();
   rays.directions.row(row) = (d / norm).transpose().cast<Scalar>();
   rays.depth_scale(row) = static_cast<Scalar>(1.0 / norm);
+  // A pixel is 1/fx by 1/fy at camera depth 1, i.e. at distance ‖d_cam‖ along the ray: its
+  // width at unit distance is 1/(√(fx·fy)·‖d_cam‖) (the geometric mean of the two sides).
+  const double width = 1.0 / (std::sqrt(camera.intrinsics.fx * camera.intrinsics.fy) * norm);
+  rays.radius(row) = static_cast<Scalar>(2.0 / std::sqrt(12.0) * width);
 }
 
 template <typename Scalar>

@@ -57,7 +57,8 @@ template <typename Scalar>
 Rays<Scalar> image_rays(const Camera& camera);
 
 // Writes the ray through continuous image coordinates (u, v) into row `row` of `rays`
-// (direction normalized, depth_scale = 1/‖d_cam‖); near and far are left as they are.
+// (direction normalized, depth_scale = 1/‖d_cam‖, the cone radius of its pixel, rays.h);
+// near and far are left as they are.
 template <typename Scalar>
 void set_ray(const Camera& camera, double u, double v, Rays<Scalar>& rays, Eigen::Index row);
 

@@ -15,6 +15,12 @@
 //   near, far    N       the part of the ray to integrate, t ∈ [near, far]; empty when
 //                        far ≤ near (a ray that misses the scene box). Samplers give such a ray
 //                        no samples, and the renderer gives it the background.
+//   radius       N       the ray as a cone (mip-NeRF, Barron et al. 2021): its radius at distance
+//                        t is radius · t. A camera ray's is 2/√12 times its pixel's width at unit
+//                        distance, so that the cone's cross-section has the variance of the
+//                        pixel's square (a disc of radius ρ has ρ²/4 per axis, a square of side
+//                        w has w²/12). 0: a ray of no width. Only the frustum Gaussians read
+//                        it (cone_frustums.h), which refuse rays without it (empty).
 //
 // Scalar is float for training (the default for radiance fields) or double for tests.
 #pragma once
@@ -49,16 +55,19 @@ struct Rays {
   Vector<Scalar> depth_scale;
   Vector<Scalar> near;
   Vector<Scalar> far;
+  Vector<Scalar> radius;
 
   Eigen::Index size() const { return origins.rows(); }
 
-  // Room for n rays: near = 0, far = +∞ (a sampler asks for a finite far), depth_scale = 1.
+  // Room for n rays: near = 0, far = +∞ (a sampler asks for a finite far), depth_scale = 1,
+  // radius = 0.
   void resize(Eigen::Index n) {
     origins.resize(n, 3);
     directions.resize(n, 3);
     depth_scale.setOnes(n);
     near.setZero(n);
     far.setConstant(n, std::numeric_limits<Scalar>::infinity());
+    radius.setZero(n);
   }
 
   // The same rays in another scalar type.
@@ -66,7 +75,15 @@ struct Rays {
   Rays<Other> cast() const {
     return {origins.template cast<Other>(), directions.template cast<Other>(),
             depth_scale.template cast<Other>(), near.template cast<Other>(),
-            far.template cast<Other>()};
+            far.template cast<Other>(), radius.template cast<Other>()};
+  }
+
+  // Rays `rows` of these (an index list or an Eigen sequence). Rays filled member by member
+  // without resize may leave `radius` empty; their subset's is empty too.
+  template <typename Rows>
+  Rays subset(const Rows& rows) const {
+    return {origins(rows, Eigen::all), directions(rows, Eigen::all), depth_scale(rows), near(rows),
+            far(rows), radius.size() == 0 ? Vector<Scalar>() : Vector<Scalar>(radius(rows))};
   }
 };
 

@@ -17,6 +17,10 @@ void Problem::render_views(const OutputContext&, const RenderRequest&) const {
   throw std::invalid_argument("this problem's field renders no images (nfield render takes a radiance-field checkpoint, problem: nerf)");
 }
 
+void Problem::give_input_variances() {
+  throw std::logic_error("this problem gives no variances of its points (Problem::gives_input_variances)");
+}
+
 void Problem::write_outputs(const OutputContext&, std::vector<std::pair<std::string, double>>&) const {}
 
 }  // namespace nfield::solvers

@@ -56,6 +56,13 @@ class Problem {
   // The field's inputs: the domain's coordinates, or more (a radiance field also takes the
   // ray direction).
   virtual int field_input_dim() const { return domain().input_dim(); }
+  // Variances beside the inputs, for encodings that read them (integrated_positional,
+  // fields/integrated_positional.h): whether the problem can give each point's variance per
+  // encoded coordinate (a radiance field: each sample's frustum Gaussian), and the switch the
+  // program turns on when the field's encoding reads them, after which field_input_dim()
+  // counts the variance columns and every point the problem hands the field carries them.
+  virtual bool gives_input_variances() const { return false; }
+  virtual void give_input_variances();
   virtual int output_dim() const { return 1; }
   virtual std::vector<std::string> output_names() const { return {"u"}; }
   virtual std::vector<LossTerm> loss_terms() const = 0;

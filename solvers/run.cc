@@ -13,6 +13,7 @@
 #include <optional>
 #include <nlohmann/json.hpp>
 
+#include "fields/encoding_type.h"
 #include "fields/field_config.h"
 #include "fields/field_io.h"
 #include "io/atomic_write.h"
@@ -325,6 +326,24 @@ RunSetup setup_run(io::ConfigNode root, const std::filesystem::path& config,
                                               s.problem->field_input_dim(),
                                               s.problem->output_dim(), s.training.seed,
                                               s.problem->domain().input_names());
+  // Encodings that read variances beside the coordinates (integrated_positional) need a
+  // problem that gives them; it then appends them to every point it hands the field.
+  if (fields::reads_variances(s.field.encoding)) {
+    const io::ConfigNode encoding = s.root.child("field").child("encoding");
+    if (!s.problem->gives_input_variances())
+      throw encoding.error("type", "'" + s.field.encoding.type +
+                                       "' reads a variance beside each coordinate, and problem '" +
+                                       s.root.get<std::string>("problem") +
+                                       "' gives none (problem: nerf does: each sample's frustum)");
+    const int coordinates = s.problem->field_input_dim();
+    s.problem->give_input_variances();
+    const int given = s.problem->field_input_dim() - coordinates;
+    if (s.field.input_dim - coordinates != given)
+      throw encoding.error("type", "'" + s.field.encoding.type + "' on a '" + s.field.type + "' field reads " +
+                                       std::to_string(s.field.input_dim - coordinates) + " variances, problem '" +
+                                       s.root.get<std::string>("problem") + "' gives " + std::to_string(given) +
+                                       " (one per position coordinate: use field.type: nerf)");
+  }
   // Encodings that map the domain onto a grid (hash_grid) need its box; saved with the field.
   const Eigen::VectorXd lower = s.problem->domain().input_lower();
   const Eigen::VectorXd upper = s.problem->domain().input_upper();

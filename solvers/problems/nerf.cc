@@ -24,6 +24,7 @@
 //       threshold: 0.01          #   opacity of one march step above which a cell is occupied
 //       steps_per_diagonal: 256  #   march step = box diagonal / this (replaces `samples`)
 //   field: {type: nerf, ...}     # input [x, d], output [s, r, g, b] (fields/field.h)
+//                                # encoding integrated_positional: input [x, d, σ²]
 //   training:
 //     batch: {rays: 1024}        # rays per step
 //
@@ -45,6 +46,16 @@
 // is updated from the field's density every `every` steps (Problem::watch_field) and is
 // rebuilt, not saved, on resume: every cell counts as occupied until the first update.
 //
+// With an encoding that reads variances (integrated_positional, mip-NeRF), each sample is the
+// Gaussian of its conical frustum (integrators/cone_frustums.h: the ray's cone of its pixel,
+// the stretch of length δ centred on the sample): the field's input is [mean, d, diagonal
+// variance]. Density queries at bare points (the occupancy grid's updates, density.vti and
+// the surface) give every point the isotropic variance of a typical sample: the frustum of
+// one step (the march step, or the box diagonal over `samples`) at the training cameras'
+// mean distance from the box centre with the central pixel's cone, its three axis variances
+// averaged. A field trained on Gaussians has no meaning at σ² = 0 in its damped octaves
+// (fields/integrated_positional.h).
+//
 // Outputs: the density σ on output.grid over the scene box as density.vti, its isosurface
 // σ = render.surface as surface.vtp and surface.ply (VTK flying edges); every test view rendered (midpoint samples), beside its ground truth, the error,
 // depth and opacity, as PNGs in test_views/; PSNR and SSIM per view and their means in
@@ -59,6 +70,7 @@
 #include <numbers>
 
 #include "autodiff/sequential.h"
+#include "integrators/cone_frustums.h"
 #include "integrators/multiview_dataset.h"
 #include "integrators/occupancy_grid.h"
 #include "integrators/ray_batch.h"
@@ -78,10 +90,18 @@ namespace {
 
 using integrators::RaySamples;
 
-// The network's inputs [x, d] at every sample of every ray.
-Eigen::MatrixXd sample_inputs(const integrators::Rays<double>& rays, const RaySamples<double>& samples) {
-  Eigen::MatrixXd x(samples.size(), 6);
-  x << integrators::sample_points(rays, samples), integrators::sample_directions(rays, samples);
+// The network's inputs [x, d] at every sample of every ray; with `variances`, [mean, d,
+// variance] of each sample's frustum Gaussian.
+Eigen::MatrixXd sample_inputs(const integrators::Rays<double>& rays, const RaySamples<double>& samples,
+                              bool variances) {
+  if (!variances) {
+    Eigen::MatrixXd x(samples.size(), 6);
+    x << integrators::sample_points(rays, samples), integrators::sample_directions(rays, samples);
+    return x;
+  }
+  const integrators::SampleGaussians<double> gaussians = integrators::sample_gaussians(rays, samples);
+  Eigen::MatrixXd x(samples.size(), 9);
+  x << gaussians.mean, integrators::sample_directions(rays, samples), gaussians.variance;
   return x;
 }
 
@@ -174,7 +194,23 @@ class Nerf final : public Problem {
   }
 
   const Domain& domain() const override { return scene_.domain(); }
-  int field_input_dim() const override { return 6; }
+  int field_input_dim() const override { return variances_ ? 9 : 6; }
+  bool gives_input_variances() const override { return true; }
+  void give_input_variances() override {
+    variances_ = true;
+    // The frustum of one step at the cameras' mean distance, through the central pixel.
+    const Eigen::Vector3d centre = 0.5 * (box_.lower + box_.upper);
+    double distance = 0;
+    const auto& frames = scene_.train().frames;
+    for (const auto& frame : frames) distance += (frame.camera.centre() - centre).norm();
+    distance /= static_cast<double>(frames.size());
+    const double step = box_.size().norm() / (grid_ ? occupancy_.march.steps_per_diagonal : samples_);
+    const integrators::Intrinsics& camera = scene_.train().intrinsics;
+    const double radius = 2.0 / std::sqrt(12.0) / std::sqrt(camera.fx * camera.fy);
+    const integrators::FrustumMoments f =
+        integrators::frustum_moments(std::max(distance - step / 2, 0.0), distance + step / 2, radius);
+    point_variance_ = (f.along + 2 * f.across) / 3;
+  }
   int output_dim() const override { return 4; }
   std::vector<std::string> output_names() const override { return {"density", "red", "green", "blue"}; }
   int residual_term() const override { return -1; }
@@ -202,7 +238,7 @@ class Nerf final : public Problem {
     LossTerm rgb;
     rgb.name = "rgb";
     rgb.batch_key = "rays";
-    rgb.spec = autodiff::StreamSpec::values(6);
+    rgb.spec = autodiff::StreamSpec::values(field_input_dim());
     rgb.sample = [this](Random& rng, Eigen::Index rays) { return draw(rng, rays); };
     const DensityActivation density = density_;
     rgb.residual = [density](const TermPoints& points) -> std::unique_ptr<Residual> {
@@ -267,12 +303,14 @@ class Nerf final : public Problem {
     grid_ = std::make_unique<integrators::OccupancyGrid>(box_, o.grid);
   }
 
-  // σ at points (N × 3): the density does not depend on the direction, any will do.
+  // σ at points (N × 3): the density does not depend on the direction, any will do; with
+  // variances, a typical sample's (give_input_variances).
   Eigen::VectorXd density_with(const FieldValues& values, const Eigen::MatrixXd& points) const {
-    Eigen::MatrixXd x(points.rows(), 6);
+    Eigen::MatrixXd x(points.rows(), field_input_dim());
     x.leftCols(3) = points;
-    x.rightCols(3).setZero();
+    x.middleCols(3, 3).setZero();
     x.col(5).setOnes();
+    if (variances_) x.rightCols(3).setConstant(point_variance_);
     return values(x).col(0).unaryExpr([this](double s) { return density_.value(s); });
   }
   Eigen::VectorXd density_at(const Eigen::MatrixXd& points) const { return density_with(field_, points); }
@@ -300,7 +338,7 @@ class Nerf final : public Problem {
     batch->target = std::move(drawn.target);
     batch->background = std::move(drawn.background);
     TermPoints points;
-    points.x = sample_inputs(pixel_rays, batch->samples);
+    points.x = sample_inputs(pixel_rays, batch->samples, variances_);
     points.groups = batch->samples.offsets;
     samples_per_step_ = batch->samples.size();
     points.context = std::move(batch);
@@ -312,7 +350,7 @@ class Nerf final : public Problem {
   RaySamples<double> refined(const FieldValues& values, const integrators::Rays<double>& rays,
                              const RaySamples<double>& coarse, const Eigen::Vector3d& background,
                              bool deterministic, std::mt19937_64& engine) const {
-    const Shading coarse_shading = shade(values(sample_inputs(rays, coarse)), density_);
+    const Shading coarse_shading = shade(values(sample_inputs(rays, coarse, variances_)), density_);
     const auto weights = integrators::render<double>(coarse, coarse_shading.sigma, coarse_shading.rgb,
                                                      background.transpose()).weights;
     integrators::ImportanceOptions options;
@@ -330,7 +368,7 @@ class Nerf final : public Problem {
       RaySamples<double> samples = grid ? grid->march(rays, occupancy_.march)
                                         : integrators::stratified_samples(rays, {samples_, false}, unused);
       if (!grid && importance_ > 0) samples = refined(context.values, rays, samples, background, true, unused);
-      return composite(samples, shade(context.values(sample_inputs(rays, samples)), density_), background);
+      return composite(samples, shade(context.values(sample_inputs(rays, samples, variances_)), density_), background);
     };
   }
 
@@ -356,6 +394,8 @@ class Nerf final : public Problem {
   integrators::SceneBox box_;
   int samples_ = 64;
   int importance_ = 0;
+  bool variances_ = false;      // the field reads [mean, d, variance] (give_input_variances)
+  double point_variance_ = 0;   // the variance per axis of a density query at a point
   double surface_ = 10;
   DensityActivation density_;
   OccupancySettings occupancy_;

@@ -37,11 +37,7 @@ integrators::PixelBatch<double> every_other(const integrators::PixelBatch<double
   for (Eigen::Index p = 0; p < all.rgb.rows(); ++p)
     if ((p / width) % stride == 0 && (p % width) % stride == 0) keep.push_back(p);
   integrators::PixelBatch<double> some;
-  some.rays.origins = all.rays.origins(keep, Eigen::all);
-  some.rays.directions = all.rays.directions(keep, Eigen::all);
-  some.rays.depth_scale = all.rays.depth_scale(keep);
-  some.rays.near = all.rays.near(keep);
-  some.rays.far = all.rays.far(keep);
+  some.rays = all.rays.subset(keep);
   some.rgb = all.rgb(keep, Eigen::all);
   some.background = all.background;
   return some;

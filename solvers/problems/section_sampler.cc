@@ -162,8 +162,7 @@ SamplerUpdate SectionSampler::update(const integrators::Rays<double>& rays, cons
                                      const Eigen::MatrixXd& background, const FieldStreams& field,
                                      const DensityActivation& density, double density_scale) {
   const Eigen::Index n = std::min<Eigen::Index>(rays.size(), options_.rays);
-  const integrators::Rays<double> read{rays.origins.topRows(n), rays.directions.topRows(n),
-                                       rays.depth_scale.head(n), rays.near.head(n), rays.far.head(n)};
+  const integrators::Rays<double> read = rays.subset(Eigen::seqN(0, n));
   const Eigen::MatrixXd read_background = background.rows() == 1 ? background : background.topRows(n);
   Eigen::VectorXd gradient;
   const SamplerUpdate result =

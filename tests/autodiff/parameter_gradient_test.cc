@@ -124,10 +124,13 @@ TEST_P(ParameterGradients, MatchFiniteDifferences) {
 TEST_P(ParameterGradients, IndependentOfBlocksAndThreads) {
   const std::uint64_t seed = fnv1a(GetParam().name()) % 100000 + 3;
   std::mt19937_64 rng(seed);
-  fields::Field<double> field(small_options(GetParam(), 3, 2, seed));
-  const Eigen::MatrixXd x = random_matrix(37, 3, rng);
+  const int d = takes_input_dim(GetParam(), 3) ? 3 : 4;
+  fields::Field<double> field(small_options(GetParam(), d, 2, seed));
+  Eigen::MatrixXd x = random_matrix(37, d, rng);
+  const int variances = d - ReferenceField(field).variance_begin();  // in [0, kHighestVariance]
+  x.rightCols(variances) = (x.rightCols(variances).array() + 1) * (kHighestVariance / 2);
   field.network().set_options({.block_points = 128, .threads = 1});
-  const Problem p = make_problem(field.network(), field.parameters(), axes_spec(3, rng, 4), x);
+  const Problem p = make_problem(field.network(), field.parameters(), axes_spec(d, rng, 4), x);
   Streams<double> reference_out;
   field.evaluate(p.layout, x, reference_out);
   double reference_loss = 0;

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "fields/encoding_type.h"
 #include "fields/field_io.h"
 
 namespace nfield::fields {
@@ -50,14 +51,18 @@ void expect_round_trip(const FieldOptions& options, const std::string& name) {
   EXPECT_EQ(shape[0], static_cast<std::uint64_t>(options.hidden[0]));
   EXPECT_EQ(file.shape("field/layers/" + std::to_string(options.hidden.size()) + "/bias")[0],
             static_cast<std::uint64_t>(options.output_dim));
-  const autodiff::Matrix<Scalar> x = autodiff::Matrix<Scalar>::Random(7, options.input_dim);
+  autodiff::Matrix<Scalar> x = autodiff::Matrix<Scalar>::Random(7, options.input_dim);
+  if (reads_variances(options.encoding)) {  // [μ, σ²] with σ² ≥ 0
+    const Eigen::Index k = options.input_dim / 2;
+    x.rightCols(k) = x.rightCols(k).cwiseAbs() * Scalar(0.01);
+  }
   EXPECT_EQ(loaded.values(x), field.values(x));
 }
 
 TEST(FieldIo, RoundTripIsBitExactForEveryEncodingAndPrecision) {
   for (const std::string& encoding : encoding_names()) {
     FieldOptions options;
-    options.input_dim = 3;
+    options.input_dim = reads_variances(EncodingOptions{.type = encoding}) ? 4 : 3;  // [μ, σ²]
     options.output_dim = 2;
     options.hidden = {8, 6};
     options.encoding.type = encoding;

@@ -6,6 +6,7 @@
 // file, line and key.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -135,6 +136,89 @@ TEST(Nerf, ShortTrainingLowersTheLossAndWritesTestViews) {
   poses.poses = kBunny / "transforms_test.json";
   render_checkpoint(dir / "checkpoint.h5", poses, dir / "views");
   EXPECT_TRUE(std::filesystem::exists(dir / "views/view_007_error.png"));
+}
+
+// mip-NeRF's integrated positional encoding: the points are [mean, d, variance] of each
+// sample's frustum Gaussian (a pixel's cone, one interval long), the field trains on them,
+// and `nfield render` renders its checkpoint.
+std::string with_encoding(std::string text, const std::string& encoding) {
+  const std::string plain = "encoding: {type: positional, frequencies: 6}";
+  return text.replace(text.find(plain), plain.size(), "encoding: " + encoding);
+}
+
+TEST(Nerf, IntegratedPositionalEncodingTrainsOnFrustums) {
+  const auto dir = testutil::scratch_dir("nerf_mip");
+  const std::string text = with_encoding(nerf_config(bunny_data(true), "output: {dir: " + dir.string() + "}\n"),
+                                         "{type: integrated_positional, frequencies: 6}");
+  RunSetup setup = load_run(testutil::write_config("nerf_mip", text), {});
+  ASSERT_EQ(setup.problem->field_input_dim(), 9);
+  ASSERT_EQ(setup.field.input_dim, 9);
+  Random rng(3);
+  const TermPoints points = setup.problem->loss_terms()[0].sample(rng, 16);
+  ASSERT_EQ(points.x.cols(), 9);
+  ASSERT_GT(points.x.rows(), 16 * 8);
+  // A 128² view of the bunny from about 4 units: a pixel's cone is some 1e-2 wide there, an
+  // interval (1.2·√3/16) 0.13 long, so σ² across ~ 1e-5 and along ~ 1e-3.
+  const Eigen::MatrixXd variances = points.x.rightCols(3);
+  EXPECT_GT(variances.minCoeff(), 1e-7);
+  EXPECT_LT(variances.maxCoeff(), 1e-2);
+  for (Eigen::Index i = 0; i < points.x.rows(); ++i) EXPECT_NEAR(points.x.row(i).segment(3, 3).norm(), 1.0, 1e-12);
+  ASSERT_EQ(execute_run(setup, {}), 0);
+  std::ifstream in(dir / "metrics.json");
+  const auto metrics = nlohmann::json::parse(in);
+  EXPECT_LT(metrics["loss"].get<double>(), 0.08);
+  EXPECT_GT(metrics["psnr_mean"].get<double>(), 14.0);
+  RenderRequest turntable;
+  turntable.turntable_frames = 2;
+  render_checkpoint(dir / "checkpoint.h5", turntable, dir / "turntable");
+  const io::Image frame = io::read_png(dir / "turntable/turntable_001_render.png");
+  const auto pixel = [&](int r, int c) { return frame.pixels.row(r * 128 + c).head(3).mean(); };
+  EXPECT_LT(pixel(64, 64), 0.95f);
+  EXPECT_GT(pixel(2, 2), 0.9f);
+}
+
+// Line and column (1-based) of the first `needle` in `text`.
+testutil::Located located(const std::string& text, const std::string& needle, const std::string& key,
+                          const std::string& part) {
+  const std::size_t at = text.find(needle);
+  const std::size_t line_start = text.rfind('\n', at) == std::string::npos ? 0 : text.rfind('\n', at) + 1;
+  const int line = 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n'));
+  return {line, static_cast<int>(at - line_start) + 1, key, part};
+}
+
+TEST(Nerf, IntegratedPositionalConfigErrorsAreLocated) {
+  auto check = [](const std::string& text, const std::string& needle, const std::string& key,
+                  const std::string& part) {
+    testutil::expect_located_error(testutil::write_config("nerf_mip", text), located(text, needle, key, part));
+  };
+  const std::string nerf = nerf_config(bunny_data());
+  check(with_encoding(nerf, "{type: integrated_positional, frequencies: 25}"), "25", "field.encoding.frequencies",
+        "24");
+  check(with_encoding(nerf, "{type: integrated_positional, frequencies: 0}"), "0}", "field.encoding.frequencies",
+        "1");
+  check(with_encoding(nerf, "{type: integrated_positional, normalize: true}"), "normalize",
+        "field.encoding.normalize", "unknown key 'normalize'");
+  // A radiance problem gives a variance per position coordinate; an mlp over [x, d] would read six.
+  std::string mlp = with_encoding(nerf, "{type: integrated_positional}");
+  const std::string nerf_field = "type: nerf, hidden: [32, 32], color_hidden: [16],";
+  mlp.replace(mlp.find(nerf_field), nerf_field.size(), "type: mlp, hidden: [32, 32],");
+  check(mlp, "integrated_positional", "field.encoding.type", "use field.type: nerf");
+  // A problem without variances (Poisson's points are bare coordinates).
+  const std::string poisson =
+      "problem: poisson\n"
+      "domain: {lower: [0, 0], upper: [1, 1]}\n"
+      "equation: {source: \"0\"}\n"
+      "conditions: [{on: boundary, type: dirichlet, value: \"0\"}]\n"
+      "field:\n"
+      "  type: mlp\n"
+      "  encoding: {type: integrated_positional, frequencies: 4}\n";
+  check(poisson, "integrated_positional", "field.encoding.type", "problem 'poisson' gives none");
+  // AutoInt's sections are no frustums either.
+  check("problem: autoint_1d\n"
+        "domain: {lower: [0], upper: [1]}\n"
+        "equation: {integrand: \"cos(x)\"}\n"
+        "field: {type: mlp, encoding: {type: integrated_positional}}\n",
+        "integrated_positional", "field.encoding.type", "gives none");
 }
 
 // A copy of the bunny's transforms with `edit` applied, in a scratch folder whose images

@@ -8,6 +8,9 @@
 // Layout read (fields/field.h, fields/dense.h, fields/encodings.h):
 //   encoding   [x if positional and include_input, sin(x Bᵀ), cos(x Bᵀ)], B = encoding_matrix()
 //              cusp: [x, |x_a − c_k| for the planes c_k of options.encoding.at]
+//              integrated_positional: input [μ (k), σ² (k)], k = d/2: [μ if include_input,
+//              sin(2ˡπ μᵢ) e^{−4ˡπ²σᵢ²/2} for l < L, i < k (octave-major), then the same with
+//              cos], written here from the definition in fields/integrated_positional.h
 //              hash_grid: [x if include_input, per level the interpolation of the cell's
 //              corner rows], written here
 //              from the definition in fields/hash_grid.h (only the level sizes come from
@@ -201,13 +204,18 @@ class ReferenceField {
     siren_ = Registry<int>::lower(options_.type) == "siren";
     cusp_ = Registry<int>::lower(options_.encoding.type) == "cusp";
     hash_ = Registry<int>::lower(options_.encoding.type) == "hash_grid";
-    include_input_ = hash_ ? options_.encoding.include_input
+    integrated_ = Registry<int>::lower(options_.encoding.type) == "integrated_positional";
+    include_input_ = hash_ || integrated_ ? options_.encoding.include_input
                            : encoding_.rows() == 0 || cusp_ ||
                                  (Registry<int>::lower(options_.encoding.type) == "positional" &&
                                   options_.encoding.include_input);
     Eigen::Index width = (include_input_ ? options_.input_dim : 0) +
                          (cusp_ ? 1 : 2) * encoding_.rows();
     Eigen::Index count = 0;
+    if (integrated_) {
+      const Eigen::Index k = options_.input_dim / 2;
+      width = (include_input_ ? k : 0) + 2 * options_.encoding.frequencies * k;
+    }
     if (hash_) {
       levels_ = fields::hash_grid_levels(options_.encoding, options_.input_dim);
       const Eigen::Index f = options_.encoding.features_per_level;
@@ -234,6 +242,9 @@ class ReferenceField {
 
   int input_dim() const { return options_.input_dim; }
   int output_dim() const { return options_.output_dim; }
+  // Inputs [variance_begin(), input_dim()) are variances (≥ 0): the integrated positional
+  // encoding's; input_dim() when there are none.
+  int variance_begin() const { return integrated_ ? options_.input_dim / 2 : options_.input_dim; }
   const Eigen::VectorXd& parameters() const { return parameters_; }
   ReferenceField with_parameters(Eigen::VectorXd p) const {
     return ReferenceField(options_, std::move(p), encoding_);
@@ -270,7 +281,22 @@ class ReferenceField {
     if (static_cast<int>(x.size()) != d) throw std::logic_error("ReferenceField: wrong input size");
     std::vector<T> a;
     if (include_input_) a = x;
-    if (cusp_) {
+    if (integrated_) {
+      // Written from the definition: E[sin(ω x)], E[cos(ω x)] for x ~ N(μ, σ²).
+      using std::exp;
+      const int k = d / 2;
+      if (include_input_) a.resize(k);
+      std::vector<T> sines, cosines;
+      for (int l = 0; l < options_.encoding.frequencies; ++l)
+        for (int i = 0; i < k; ++i) {
+          const double omega = std::ldexp(std::numbers::pi, l);
+          const T damping = exp(constant<T>(-0.5 * omega * omega) * x[k + i]);
+          sines.push_back(sin(constant<T>(omega) * x[i]) * damping);
+          cosines.push_back(cos(constant<T>(omega) * x[i]) * damping);
+        }
+      a.insert(a.end(), sines.begin(), sines.end());
+      a.insert(a.end(), cosines.begin(), cosines.end());
+    } else if (cusp_) {
       // Written from the definition, not from encoding_matrix(): |x_a − c|.
       for (double c : options_.encoding.at) {
         const T z = x[options_.encoding.axis] - constant<T>(c);
@@ -367,7 +393,7 @@ class ReferenceField {
   fields::FieldOptions options_;
   Eigen::VectorXd parameters_;
   Eigen::MatrixXd encoding_;
-  bool siren_ = true, cusp_ = false, hash_ = false, include_input_ = true;
+  bool siren_ = true, cusp_ = false, hash_ = false, integrated_ = false, include_input_ = true;
   std::vector<fields::HashGridLevel> levels_;
   Eigen::Index table_count_ = 0;
   std::vector<std::shared_ptr<autodiff::ElementwiseFunction<double>>> tables_;

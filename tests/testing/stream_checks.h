@@ -24,6 +24,7 @@
 
 #include "autodiff/streams.h"
 #include "fields/activations.h"
+#include "fields/encoding_type.h"
 #include "fields/encodings.h"
 #include "fields/field.h"
 #include "tests/testing/reference_field.h"
@@ -280,6 +281,12 @@ inline std::vector<NetworkCase> registered_network_cases() {
   return cases;
 }
 
+// Whether the case's field takes d inputs: an encoding that reads variances takes k means and
+// k variances (fields/integrated_positional.h), so an even number.
+inline bool takes_input_dim(const NetworkCase& c, int d) {
+  return !fields::encoding_type(c.encoding).reads_variances() || d % 2 == 0;
+}
+
 inline std::string case_name(const ::testing::TestParamInfo<NetworkCase>& info) {
   return info.param.name();
 }
@@ -311,8 +318,10 @@ inline fields::FieldOptions small_options(const NetworkCase& c, int input_dim, i
   o.encoding.finest_resolution = 6;
   o.encoding.interpolation = "smoothstep";
   o.encoding.init_scale = 0.5;  // features of order 1, as after training
-  o.encoding.lower.assign(input_dim, -1.0);
-  o.encoding.upper.assign(input_dim, 1.0);
+  // One bound per coordinate: an encoding that reads variances has input_dim / 2 of them.
+  const int coordinates = fields::encoding_type(c.encoding).reads_variances() ? input_dim / 2 : input_dim;
+  o.encoding.lower.assign(coordinates, -1.0);
+  o.encoding.upper.assign(coordinates, 1.0);
   o.seed = seed;
   return o;
 }
@@ -336,8 +345,13 @@ inline std::vector<bool> kink_pattern(const ReferenceField& ref, const Eigen::Ma
   return pattern;
 }
 
-// n points uniform in [−1, 1]^d; for networks with kinks, only points whose pre-activations
-// all stay at least `margin` away from 0.
+// Variances drawn for inputs that are variances (ReferenceField::variance_begin): with the
+// harness's frequencies up to 4π, e^{−ω²σ²/2} then lies in [e^{−4}, 1] for the top octave.
+inline constexpr double kLowestVariance = 0.0, kHighestVariance = 0.05;
+
+// n points uniform in [−1, 1]^d (variances uniform in [kLowestVariance, kHighestVariance]);
+// for networks with kinks, only points whose pre-activations all stay at least `margin` away
+// from 0.
 inline Eigen::MatrixXd sample_points(const ReferenceField& ref, bool kinks, Eigen::Index n,
                                      std::mt19937_64& rng, double margin = 0.05) {
   const int d = ref.input_dim();
@@ -345,7 +359,8 @@ inline Eigen::MatrixXd sample_points(const ReferenceField& ref, bool kinks, Eige
   for (Eigen::Index p = 0; p < n; ++p) {
     for (int tries = 0;; ++tries) {
       std::vector<double> xp(d);
-      for (int i = 0; i < d; ++i) xp[i] = uniform(rng);
+      for (int i = 0; i < d; ++i)
+        xp[i] = i < ref.variance_begin() ? uniform(rng) : uniform(rng, kLowestVariance, kHighestVariance);
       bool ok = true;
       if (kinks)
         for (double z : ref.preactivations(xp)) ok = ok && std::abs(z) >= margin;
