@@ -13,6 +13,7 @@ void register_problems(Registry<ProblemFactory>& registry) {
   registry.add("nerf", make_nerf);
   registry.add("autoint_1d", make_autoint_1d);
   registry.add("autoint_nerf", make_autoint_nerf);
+  registry.add("fit", make_fit);
 }
 
 namespace {

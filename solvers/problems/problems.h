@@ -18,6 +18,7 @@ std::unique_ptr<Problem> make_sdf(const ProblemContext& context);
 std::unique_ptr<Problem> make_nerf(const ProblemContext& context);
 std::unique_ptr<Problem> make_autoint_1d(const ProblemContext& context);
 std::unique_ptr<Problem> make_autoint_nerf(const ProblemContext& context);
+std::unique_ptr<Problem> make_fit(const ProblemContext& context);
 
 void register_problems(Registry<ProblemFactory>& registry);
 

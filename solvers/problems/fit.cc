@@ -1,0 +1,413 @@
+// SPDX-License-Identifier: MIT
+//
+// Signal fitting (SIREN, Sitzmann et al. 2020, Sec. 3; Instant NGP, Müller et al. 2022,
+// Sec. 5.1): a field over coordinates is fitted to the samples of an image, a sound clip or
+// a video, and compared with them after training.
+//
+//   problem: fit
+//   equation:
+//     signal: image                   # image | audio | video
+//     path: ../data/images/camera.png # relative to the config file: a PNG (image), a sound
+//                                     # file read by libsndfile (audio), or a folder of
+//                                     # same-sized PNG frames taken in file-name order (video)
+//     channels: auto                  # image, video: auto | grey | rgb (auto: grey for a
+//                                     #   grey PNG, else RGB; alpha is dropped)
+//     crop: 256                       # image, video: the central crop, n or [width, height]
+//     frames: 32                      # video: the first n frames of the folder
+//     seconds: [0.5, 2.5]             # audio: that part of the clip
+//     time_scale: 1                   # audio, video: t runs over [-s, s] instead of [-1, 1]
+//
+// Coordinates: the sample centres spread evenly over [-1, 1] on each axis, so that sample k
+// of n lies at -1 + (2k + 1)/n (the centre of its n-th of the interval): (x, y) for an image,
+// x right and y up; t for audio (the field's one input, named x in `field:` keys); (x, y, t)
+// for a video, t over the frames. The values are the pixels' channels in [0, 1], or the
+// clip's samples in [-1, 1] (channels averaged). `domain` and `conditions` are not read.
+//
+// Training: one loss term `signal` (batch `interior`): random samples, drawn with
+// replacement (all of them, in order, when the batch is at least their count), and the
+// residual value − target per channel (a LinearResidual on the value stream), so the loss
+// is the mean squared error over the batch. Every optimizer and checkpoints work as for any
+// problem. The progress line adds the PSNR (audio: SNR) on at most 65,536 evenly spread
+// samples, refreshed every 10 s.
+//
+// After training the field is evaluated at every sample. metrics.json: `rel_l2` (also per
+// stage) and `max_abs_err` over all samples and channels; image: `psnr_db`, `ssim`;
+// audio: `snr_db` = 10 log₁₀(Σ s² / Σ (ŝ − s)²) and `psnr_db` = 10 log₁₀(1 / MSE) (full
+// scale 1); video: `psnr_mean` (the mean of the frames' PSNRs), `psnr_frame_NNN` per frame,
+// `psnr_min`, `ssim_mean`, and `psnr_db` over all frames. PSNR and SSIM are those of
+// io/image_metrics.h, on the reconstruction clamped to [0, 1] (audio: [-1, 1]) as written.
+// Files: image: reconstruction.png, error.png (|error|, mean over channels, viridis from 0
+// to max_abs_err); audio: reconstruction.wav (16-bit PCM at the clip's rate) and
+// waveform.png (top: the clip in grey and the reconstruction in red; bottom: the error in
+// blue); video: frames/reconstruction_NNN.png and frames/error_NNN.png (one viridis range,
+// 0 to max_abs_err, for all frames). Every file is written atomically.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <limits>
+#include <numeric>
+
+#include "io/audio.h"
+#include "io/image_metrics.h"
+#include "io/line_plot.h"
+#include "io/png_image.h"
+#include "solvers/problems/problems.h"
+
+namespace nfield::solvers {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Samples on a regular lattice: index (f·height + r)·width + c, with c the fastest axis
+// (audio: c the sample, height = frames = 1).
+struct Signal {
+  std::string kind;  // image, audio, video
+  int width = 1, height = 1, frames = 1;
+  int channels = 1;
+  double sample_rate = 0;       // audio
+  Eigen::MatrixXf values;       // samples × channels
+  Eigen::Index size() const { return values.rows(); }
+};
+
+// A picture's pixels as `channels` (1: grey, the mean of its colour channels; 3: RGB, grey
+// repeated), its central crop of width × height.
+Eigen::MatrixXf pixels_of(const io::Image& image, int channels, int width, int height) {
+  const int x0 = (image.width - width) / 2, y0 = (image.height - height) / 2;
+  const int colour = image.channels >= 3 ? 3 : 1;
+  Eigen::MatrixXf out(static_cast<Eigen::Index>(width) * height, channels);
+  for (int r = 0; r < height; ++r)
+    for (int c = 0; c < width; ++c) {
+      const auto p = image.pixels.row(static_cast<Eigen::Index>(y0 + r) * image.width + x0 + c);
+      auto q = out.row(static_cast<Eigen::Index>(r) * width + c);
+      if (channels == 1)
+        q(0) = p.head(colour).mean();
+      else
+        for (int k = 0; k < 3; ++k) q(k) = p(colour == 3 ? k : 0);
+    }
+  return out;
+}
+
+double psnr_of(double mse, double peak = 1.0) {
+  return mse > 0 ? 10.0 * std::log10(peak * peak / mse) : std::numeric_limits<double>::infinity();
+}
+
+class Fit final : public Problem {
+ public:
+  explicit Fit(const ProblemContext& context) : domain_({-1.0}, {1.0}) {
+    const io::ConfigNode equation = context.root.child("equation");
+    signal_.kind = equation.get_choice("signal", {"image", "audio", "video"});
+    const fs::path path = context.config_dir / equation.get<std::string>("path");
+    if (signal_.kind == "audio")
+      read_audio(equation, path);
+    else
+      read_pictures(equation, path);
+    equation.reject_unknown_keys();
+    if (signal_.kind == "image")
+      domain_ = Domain({-1.0, -1.0}, {1.0, 1.0});
+    else if (signal_.kind == "audio")
+      domain_ = Domain({-time_scale_}, {time_scale_});
+    else
+      domain_ = Domain({-1.0, -1.0}, {1.0, 1.0}, std::pair{-time_scale_, time_scale_});
+    // Evenly spread samples for the progress line's figure.
+    const Eigen::Index n = signal_.size(), shown = std::min<Eigen::Index>(n, 65536);
+    progress_samples_.resize(shown);
+    for (Eigen::Index k = 0; k < shown; ++k) progress_samples_(k) = k * n / shown;
+  }
+
+  const Domain& domain() const override { return domain_; }
+  int output_dim() const override { return signal_.channels; }
+  std::vector<std::string> output_names() const override {
+    if (signal_.channels == 3) return {"red", "green", "blue"};
+    return {signal_.kind == "audio" ? "amplitude" : "grey"};
+  }
+  int residual_term() const override { return -1; }
+  bool writes_grid_outputs() const override { return false; }
+
+  std::vector<LossTerm> loss_terms() const override {
+    LossTerm term;
+    term.name = "signal";
+    term.batch_key = "interior";
+    term.spec = autodiff::StreamSpec::values(domain_.input_dim());
+    term.sample = [this](Random& rng, Eigen::Index n) {
+      const Eigen::Index count = signal_.size();
+      if (n >= count) return TermPoints(coordinates(Eigen::VectorXi::LinSpaced(count, 0, static_cast<int>(count - 1))));
+      Eigen::VectorXi index(n);
+      for (Eigen::Index i = 0; i < n; ++i)
+        index(i) = static_cast<int>(rng() % static_cast<Random::result_type>(count));
+      return TermPoints(coordinates(index));
+    };
+    term.residual = [this](const TermPoints& points) -> std::unique_ptr<Residual> {
+      const Eigen::MatrixXd& x = points.x;
+      Eigen::MatrixXd target(x.rows(), signal_.channels);
+      for (Eigen::Index i = 0; i < x.rows(); ++i)
+        target.row(i) = signal_.values.row(index_of(x.row(i))).cast<double>();
+      std::vector<LinearResidual::Term> terms;
+      for (int c = 0; c < signal_.channels; ++c) terms.push_back({c, 0, c, Eigen::VectorXd::Ones(1)});
+      return std::make_unique<LinearResidual>(std::move(terms), std::move(target));
+    };
+    return {term};
+  }
+
+  // rel_l2 over every sample, after each stage.
+  std::optional<double> reported_error(const OutputContext& context) const override {
+    const Eigen::MatrixXd fitted = evaluate_all(context);
+    return (fitted - signal_.values.cast<double>()).norm() / signal_.values.cast<double>().norm();
+  }
+
+  std::vector<std::pair<std::string, double>> progress_metrics(const OutputContext& context,
+                                                               double) const override {
+    const Eigen::MatrixXd fitted = context.values(coordinates(progress_samples_));
+    double error = 0, power = 0;
+    for (Eigen::Index k = 0; k < progress_samples_.size(); ++k) {
+      const auto target = signal_.values.row(progress_samples_(k)).cast<double>();
+      error += (fitted.row(k) - target).squaredNorm();
+      power += target.squaredNorm();
+    }
+    const double mse = error / static_cast<double>(fitted.size());
+    if (signal_.kind == "audio") return {{"SNR dB", 10.0 * std::log10(power / std::max(error, 1e-300))}};
+    return {{"PSNR", psnr_of(mse)}};
+  }
+
+  void write_outputs(const OutputContext& context,
+                     std::vector<std::pair<std::string, double>>& metrics) const override {
+    Eigen::MatrixXd fitted = evaluate_all(context);
+    const Eigen::MatrixXd target = signal_.values.cast<double>();
+    metrics.emplace_back("rel_l2", (fitted - target).norm() / target.norm());
+    const double low = signal_.kind == "audio" ? -1.0 : 0.0;
+    fitted = fitted.cwiseMax(low).cwiseMin(1.0);
+    const Eigen::MatrixXd error = fitted - target;
+    const double max_abs = error.cwiseAbs().maxCoeff();
+    metrics.emplace_back("max_abs_err", max_abs);
+    const double mse = error.squaredNorm() / static_cast<double>(error.size());
+    if (signal_.kind == "audio") {
+      write_audio_outputs(context, fitted.col(0), metrics);
+      return;
+    }
+    metrics.emplace_back("psnr_db", psnr_of(mse));
+    const Eigen::Index frame = static_cast<Eigen::Index>(signal_.width) * signal_.height;
+    const io::ScalarImageOptions error_colours{std::pair{0.0, std::max(max_abs, 1e-12)}, io::Colormap::kViridis};
+    const auto picture = [&](Eigen::Index f) {
+      return io::Image{signal_.width, signal_.height, signal_.channels,
+                       fitted.middleRows(f * frame, frame).cast<float>()};
+    };
+    const auto error_map = [&](Eigen::Index f) {
+      const Eigen::VectorXd e = error.middleRows(f * frame, frame).cwiseAbs().rowwise().mean();
+      return Eigen::MatrixXd(Eigen::Map<const Eigen::Matrix<double, -1, -1, Eigen::RowMajor>>(
+          e.data(), signal_.height, signal_.width));
+    };
+    const bool ssim_possible = signal_.width >= 11 && signal_.height >= 11;
+    if (signal_.kind == "image") {
+      if (ssim_possible)
+        metrics.emplace_back("ssim", io::ssim(picture(0).pixels, signal_.values, signal_.width, signal_.height));
+      io::write_png(context.dir / "reconstruction.png", picture(0));
+      io::write_scalar_png(context.dir / "error.png", error_map(0), error_colours);
+      std::printf("PSNR %.2f dB\n", psnr_of(mse));
+      return;
+    }
+    const fs::path dir = context.dir / "frames";
+    fs::create_directories(dir);
+    double sum = 0, least = std::numeric_limits<double>::infinity(), ssim_sum = 0;
+    char name[64];
+    for (int f = 0; f < signal_.frames; ++f) {
+      const double frame_psnr = psnr_of(error.middleRows(f * frame, frame).squaredNorm() /
+                                        static_cast<double>(frame * signal_.channels));
+      std::snprintf(name, sizeof name, "psnr_frame_%03d", f);
+      metrics.emplace_back(name, frame_psnr);
+      sum += frame_psnr;
+      least = std::min(least, frame_psnr);
+      const io::Image image = picture(f);
+      if (ssim_possible)
+        ssim_sum += io::ssim(image.pixels, signal_.values.middleRows(f * frame, frame), signal_.width, signal_.height);
+      std::snprintf(name, sizeof name, "reconstruction_%03d.png", f);
+      io::write_png(dir / name, image);
+      std::snprintf(name, sizeof name, "error_%03d.png", f);
+      io::write_scalar_png(dir / name, error_map(f), error_colours);
+    }
+    metrics.emplace_back("psnr_mean", sum / signal_.frames);
+    metrics.emplace_back("psnr_min", least);
+    if (ssim_possible) metrics.emplace_back("ssim_mean", ssim_sum / signal_.frames);
+    std::printf("mean PSNR over %d frames %.2f dB (lowest %.2f dB)\n", signal_.frames, sum / signal_.frames, least);
+  }
+
+ private:
+  void read_audio(const io::ConfigNode& equation, const fs::path& path) {
+    io::AudioClip clip;
+    try {
+      clip = io::read_audio(path);
+    } catch (const std::exception& e) {
+      throw equation.error("path", e.what());
+    }
+    Eigen::Index first = 0, count = clip.samples.size();
+    if (equation.has("seconds")) {
+      const std::vector<double> span = equation.get_list<double>("seconds", 2);
+      equation.require("seconds", 0 <= span[0] && span[0] < span[1] && span[1] <= clip.seconds(),
+                       "expected [start, end] with 0 <= start < end <= " + std::to_string(clip.seconds()) +
+                           " (the clip's length in seconds)");
+      first = static_cast<Eigen::Index>(std::floor(span[0] * clip.sample_rate));
+      count = std::min<Eigen::Index>(static_cast<Eigen::Index>(std::ceil(span[1] * clip.sample_rate)),
+                                     clip.samples.size()) - first;
+    }
+    equation.require(equation.has("seconds") ? "seconds" : "path", count >= 2,
+                     "the clip has fewer than two samples there");
+    read_time_scale(equation);
+    signal_.width = static_cast<int>(count);
+    signal_.sample_rate = clip.sample_rate;
+    signal_.values = clip.samples.segment(first, count).cast<float>();
+  }
+
+  void read_time_scale(const io::ConfigNode& equation) {
+    time_scale_ = equation.get_or("time_scale", 1.0);
+    equation.require("time_scale", time_scale_ > 0 && time_scale_ <= 1e6, "expected a number in (0, 1e6]");
+  }
+
+  // An image, or a video's frames: the PNG files of a folder in name order.
+  void read_pictures(const io::ConfigNode& equation, const fs::path& path) {
+    const bool video = signal_.kind == "video";
+    const std::string channels = equation.get_choice("channels", {"auto", "grey", "rgb"}, "auto");
+    std::optional<std::pair<int, int>> crop;
+    if (equation.has("crop")) {
+      if (equation.has_list("crop")) {
+        const std::vector<int> size = equation.get_list<int>("crop", 2);
+        equation.require("crop", size[0] >= 1 && size[1] >= 1 && size[0] <= 65536 && size[1] <= 65536,
+                         "expected [width, height], each in [1, 65536]");
+        crop = std::pair{size[0], size[1]};
+      } else {
+        const int size = equation.get_in_range("crop", 1, 65536);
+        crop = std::pair{size, size};
+      }
+    }
+    int frames = 0;
+    if (video) {
+      if (equation.has("frames")) frames = equation.get_in_range("frames", 1, 100000);
+      read_time_scale(equation);
+    }
+    std::vector<fs::path> files;
+    if (!video) {
+      files.push_back(path);
+    } else {
+      std::error_code ec;
+      if (!fs::is_directory(path, ec))
+        throw equation.error("path", path.string() + ": expected a folder of PNG frames");
+      for (const auto& entry : fs::directory_iterator(path, ec)) {
+        std::string extension = entry.path().extension().string();
+        std::transform(extension.begin(), extension.end(), extension.begin(),
+                       [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
+        if (entry.is_regular_file() && extension == ".png") files.push_back(entry.path());
+      }
+      if (ec) throw equation.error("path", path.string() + ": cannot list the folder: " + ec.message());
+      if (files.empty()) throw equation.error("path", path.string() + ": no PNG frames (*.png) in the folder");
+      std::sort(files.begin(), files.end());
+      if (frames > 0) {
+        equation.require("frames", frames <= static_cast<int>(files.size()),
+                         "expected at most " + std::to_string(files.size()) + " (the PNG files in " +
+                             path.string() + ")");
+        files.resize(static_cast<size_t>(frames));
+      }
+    }
+    std::vector<Eigen::MatrixXf> pictures;
+    int width = 0, height = 0, source_width = 0, source_height = 0;
+    for (const fs::path& file : files) {
+      io::Image image;
+      try {
+        image = io::read_png(file);
+      } catch (const std::exception& e) {
+        throw equation.error("path", e.what());
+      }
+      if (pictures.empty()) {
+        source_width = image.width;
+        source_height = image.height;
+        width = crop ? std::min(crop->first, image.width) : image.width;
+        height = crop ? std::min(crop->second, image.height) : image.height;
+        signal_.channels = channels == "grey" ? 1 : channels == "rgb" ? 3 : image.channels >= 3 ? 3 : 1;
+      } else if (image.width != source_width || image.height != source_height) {
+        throw equation.error("path", file.string() + ": a frame of " + std::to_string(image.width) + " x " +
+                                         std::to_string(image.height) + " pixels; the first frame, " +
+                                         files.front().filename().string() + ", has " +
+                                         std::to_string(source_width) + " x " + std::to_string(source_height));
+      }
+      pictures.push_back(pixels_of(image, signal_.channels, width, height));
+    }
+    signal_.width = width;
+    signal_.height = height;
+    signal_.frames = static_cast<int>(pictures.size());
+    const Eigen::Index frame = static_cast<Eigen::Index>(width) * height;
+    signal_.values.resize(frame * signal_.frames, signal_.channels);
+    for (int f = 0; f < signal_.frames; ++f) signal_.values.middleRows(f * frame, frame) = pictures[static_cast<size_t>(f)];
+  }
+
+  // Centre of sample k of n on [-1, 1].
+  static double centre(Eigen::Index k, int n) { return -1.0 + (2.0 * static_cast<double>(k) + 1.0) / n; }
+  // Its inverse, the nearest sample.
+  static Eigen::Index sample_at(double u, int n) {
+    const auto k = static_cast<Eigen::Index>(std::lround(((u + 1.0) * n - 1.0) / 2.0));
+    return std::clamp<Eigen::Index>(k, 0, n - 1);
+  }
+
+  Eigen::MatrixXd coordinates(const Eigen::VectorXi& index) const {
+    Eigen::MatrixXd x(index.size(), domain_.input_dim());
+    const Eigen::Index w = signal_.width, h = signal_.height;
+    for (Eigen::Index i = 0; i < index.size(); ++i) {
+      const Eigen::Index k = index(i);
+      if (signal_.kind == "audio") {
+        x(i, 0) = time_scale_ * centre(k, signal_.width);
+        continue;
+      }
+      x(i, 0) = centre(k % w, signal_.width);
+      x(i, 1) = -centre((k / w) % h, signal_.height);  // row 0 at the top: y up
+      if (signal_.kind == "video") x(i, 2) = time_scale_ * centre(k / (w * h), signal_.frames);
+    }
+    return x;
+  }
+
+  Eigen::Index index_of(const Eigen::Ref<const Eigen::RowVectorXd>& x) const {
+    if (signal_.kind == "audio") return sample_at(x(0) / time_scale_, signal_.width);
+    const Eigen::Index c = sample_at(x(0), signal_.width), r = sample_at(-x(1), signal_.height);
+    const Eigen::Index f = signal_.kind == "video" ? sample_at(x(2) / time_scale_, signal_.frames) : 0;
+    return (f * signal_.height + r) * signal_.width + c;
+  }
+
+  // The field at every sample (n × channels), a slice at a time.
+  Eigen::MatrixXd evaluate_all(const OutputContext& context) const {
+    const Eigen::Index n = signal_.size(), slice = 1 << 18;
+    Eigen::MatrixXd out(n, signal_.channels);
+    for (Eigen::Index first = 0; first < n; first += slice) {
+      const Eigen::Index count = std::min(slice, n - first);
+      out.middleRows(first, count) =
+          context.values(coordinates(Eigen::VectorXi::LinSpaced(count, static_cast<int>(first),
+                                                               static_cast<int>(first + count - 1))));
+    }
+    return out;
+  }
+
+  void write_audio_outputs(const OutputContext& context, const Eigen::VectorXd& fitted,
+                           std::vector<std::pair<std::string, double>>& metrics) const {
+    const Eigen::VectorXd target = signal_.values.col(0).cast<double>();
+    const Eigen::VectorXd error = fitted - target;
+    const double snr = 10.0 * std::log10(target.squaredNorm() / std::max(error.squaredNorm(), 1e-300));
+    metrics.emplace_back("snr_db", snr);
+    metrics.emplace_back("psnr_db", psnr_of(error.squaredNorm() / static_cast<double>(error.size())));
+    metrics.emplace_back("sample_rate", signal_.sample_rate);
+    metrics.emplace_back("samples", static_cast<double>(target.size()));
+    io::write_audio(context.dir / "reconstruction.wav", io::AudioClip{signal_.sample_rate, fitted});
+    const Eigen::VectorXd seconds =
+        Eigen::VectorXd::LinSpaced(target.size(), 0.0, static_cast<double>(target.size() - 1)) / signal_.sample_rate;
+    io::PlotPanel signals, errors;
+    signals.curves.push_back({seconds, target, {0.6f, 0.6f, 0.6f}});
+    signals.curves.push_back({seconds, fitted, {0.85f, 0.1f, 0.1f}});
+    errors.curves.push_back({seconds, error, {0.1f, 0.2f, 0.85f}});
+    io::write_png(context.dir / "waveform.png", io::plot_curves({signals, errors}, 1600, 600));
+    std::printf("SNR %.2f dB\n", snr);
+  }
+
+  Domain domain_;
+  Signal signal_;
+  double time_scale_ = 1.0;
+  Eigen::VectorXi progress_samples_;
+};
+
+}  // namespace
+
+std::unique_ptr<Problem> make_fit(const ProblemContext& context) { return std::make_unique<Fit>(context); }
+
+}  // namespace nfield::solvers
