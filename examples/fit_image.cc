@@ -5,6 +5,8 @@
 // What it shows: building a field, a loss over one stream (the value), the chunked
 // forward/reverse pass, Adam, and then evaluating the trained field's gradient and
 // Laplacian streams — derivatives the image was never trained on.
+// (To fit images, sound clips and videos from a config, without code: `problem: fit`,
+// solvers/problems/fit.cc and configs/fit_image.yaml; this program stays a tutorial.)
 //
 // Run:   build/examples/fit_image data/images/camera.png --steps 500 --out out/fit_image
 // Small: build/examples/fit_image data/images/camera.png --crop 64 --steps 100 --min-psnr 25

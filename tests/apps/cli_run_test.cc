@@ -516,5 +516,80 @@ TEST(AutoIntRunTest, WritesCurvesAndIntegralMetrics) {
   EXPECT_GE(metrics["quadrature_evaluations_per_integral"].get<double>(), 15);
 }
 
+// nfield run on the shipped signal-fitting configs in a tiny setting: each writes its files;
+// a bad key exits 2 with one located line and writes nothing; an Adam run resumed from its
+// checkpoint ends where an uninterrupted one does.
+TEST(FitRunTest, ShippedConfigsWriteTheirOutputsAndRefuseBadKeys) {
+  const auto dir = scratch_dir();
+  const std::vector<std::string> small = {"--set", "training.stages=[{optimizer: adam, steps: 4, lr: 1.0e-2}]",
+                                          "--set", "training.batch.interior=256"};
+  const auto run = [&](const std::string& config, const std::string& out, std::vector<std::string> extra) {
+    std::vector<std::string> args = {"run", std::string(NFIELD_SOURCE_DIR "/configs/") + config, "--out", (dir / out).string()};
+    args.insert(args.end(), small.begin(), small.end());
+    args.insert(args.end(), extra.begin(), extra.end());
+    return run_nfield(args, dir, dir / "capture");
+  };
+  Outcome o = run("fit_image.yaml", "image", {"--set", "equation.crop=24"});
+  ASSERT_EQ(o.code, 0) << describe(o);
+  EXPECT_TRUE(read_json(dir / "image" / "metrics.json").contains("ssim"));
+  for (const char* file : {"reconstruction.png", "error.png", "checkpoint.h5", "config.yaml"})
+    EXPECT_TRUE(std::filesystem::exists(dir / "image" / file)) << file;
+  o = run("fit_audio.yaml", "audio", {"--set", "equation.seconds=[0, 0.02]"});
+  ASSERT_EQ(o.code, 0) << describe(o);
+  EXPECT_TRUE(read_json(dir / "audio" / "metrics.json").contains("snr_db"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "audio" / "reconstruction.wav"));
+  o = run("fit_video.yaml", "video", {"--set", "equation.frames=2", "--set", "equation.crop=16"});
+  ASSERT_EQ(o.code, 0) << describe(o);
+  EXPECT_TRUE(read_json(dir / "video" / "metrics.json").contains("psnr_frame_001"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "video" / "frames" / "error_001.png"));
+  expect_no_temporaries(dir);
+
+  o = run("fit_image.yaml", "bad", {"--set", "equation.signal=volume"});
+  EXPECT_EQ(o.code, 2) << describe(o);
+  EXPECT_EQ(std::count(o.err.begin(), o.err.end(), '\n'), 1) << o.err;
+  EXPECT_NE(o.err.find("equation.signal"), std::string::npos) << o.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "bad"));
+  o = run("fit_video.yaml", "bad", {"--set", "equation.path=../data/audio"});
+  EXPECT_EQ(o.code, 2) << describe(o);
+  EXPECT_NE(o.err.find("equation.path"), std::string::npos) << o.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "bad"));
+
+  // Interrupted by SIGINT after step 21 of 80, then resumed: the same losses and
+  // parameters as a run never interrupted (the pipe of 4 KiB keeps the child from running
+  // far ahead of the line read, as in ResumeTest).
+  const std::vector<std::string> eighty = {"--set", "equation.crop=24", "--set", "training.log_every=1", "--set",
+                                           "training.threads=2", "--set",
+                                           "training.stages=[{optimizer: adam, steps: 80, lr: 1.0e-2}]"};
+  ASSERT_EQ(run("fit_image.yaml", "straight", eighty).code, 0);
+  std::vector<std::string> args = {"run", NFIELD_SOURCE_DIR "/configs/fit_image.yaml", "--out",
+                                   (dir / "interrupted").string()};
+  args.insert(args.end(), small.begin(), small.end());
+  args.insert(args.end(), eighty.begin(), eighty.end());
+  {
+    Child child(args, dir, dir / "stderr.txt", 4096);
+    std::string line;
+    long stopped_after = 0;
+    while (child.read_line(line)) {
+      long step = 0, total = 0;
+      if (std::sscanf(line.c_str(), "step %ld/%ld", &step, &total) == 2 && step >= 21) {
+        stopped_after = step;
+        break;
+      }
+    }
+    ASSERT_GE(stopped_after, 21) << "no progress line for step 21";
+    ASSERT_EQ(kill(child.pid(), SIGINT), 0);
+    o = child.finish();
+  }
+  ASSERT_EQ(o.code, 130) << describe(o);
+  EXPECT_LT(read_json(dir / "interrupted" / "metrics.json")["steps"].get<long>(), 80);
+  std::vector<std::string> resumed = eighty;
+  resumed.insert(resumed.end(), {"--resume", (dir / "interrupted" / "checkpoint.h5").string()});
+  o = run("fit_image.yaml", "resumed", resumed);
+  ASSERT_EQ(o.code, 0) << describe(o);
+  EXPECT_EQ(read_json(dir / "resumed" / "metrics.json")["losses"], read_json(dir / "straight" / "metrics.json")["losses"]);
+  EXPECT_EQ(read_json(dir / "resumed" / "metrics.json")["psnr_db"], read_json(dir / "straight" / "metrics.json")["psnr_db"]);
+  expect_same_datasets(dir / "straight" / "checkpoint.h5", dir / "resumed" / "checkpoint.h5");
+}
+
 }  // namespace
 }  // namespace nfield::apps::testing
