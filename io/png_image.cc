@@ -110,6 +110,31 @@ Rgb lookup(const Rgb (&table)[N], double t) {
 }
 }  // namespace
 
+Image central_crop(const Image& image, int width, int height) {
+  if (width < 1 || height < 1)
+    throw std::invalid_argument("central_crop: a crop of " + std::to_string(width) + " x " + std::to_string(height));
+  width = std::min(width, image.width);
+  height = std::min(height, image.height);
+  const int x0 = (image.width - width) / 2, y0 = (image.height - height) / 2;
+  Image out{width, height, image.channels, Eigen::MatrixXf(Eigen::Index{width} * height, image.channels)};
+  for (int r = 0; r < height; ++r)
+    out.pixels.middleRows(Eigen::Index{r} * width, width) =
+        image.pixels.middleRows(Eigen::Index{y0 + r} * image.width + x0, width);
+  return out;
+}
+
+Image with_channels(const Image& image, int channels) {
+  if (channels != 1 && channels != 3)
+    throw std::invalid_argument("with_channels: " + std::to_string(channels) + " channels (expected 1 or 3)");
+  const int colour = image.channels >= 3 ? 3 : 1;
+  Image out{image.width, image.height, channels, Eigen::MatrixXf(image.pixels.rows(), channels)};
+  if (channels == 1)
+    out.pixels.col(0) = image.pixels.leftCols(colour).rowwise().mean();
+  else
+    for (int k = 0; k < 3; ++k) out.pixels.col(k) = image.pixels.col(colour == 3 ? k : 0);
+  return out;
+}
+
 Image colorize(const Eigen::MatrixXd& field, const ScalarImageOptions& options) {
   double lo, hi;
   if (options.range) {

@@ -27,6 +27,15 @@ Image read_png(const std::filesystem::path& path);
 // malformed image and std::runtime_error naming `path` when writing fails.
 void write_png(const std::filesystem::path& path, const Image& image);
 
+// The central crop of min(width, image.width) × min(height, image.height) pixels (when the
+// picture is larger by an odd count, the extra column or row is left at the right or bottom).
+// Throws std::invalid_argument when width or height is below 1.
+Image central_crop(const Image& image, int width, int height);
+
+// The picture with 1 channel (grey: the mean of R, G and B, or the grey channel) or 3 (RGB: a
+// grey channel repeated); alpha is dropped. Throws std::invalid_argument for other counts.
+Image with_channels(const Image& image, int channels);
+
 // How write_scalar_png maps values to colours.
 enum class Colormap {
   kGrey,       // black to white

@@ -70,26 +70,9 @@ struct Signal {
   Eigen::Index size() const { return values.rows(); }
 };
 
-// A picture's pixels as `channels` (1: grey, the mean of its colour channels; 3: RGB, grey
-// repeated), its central crop of width × height.
-Eigen::MatrixXf pixels_of(const io::Image& image, int channels, int width, int height) {
-  const int x0 = (image.width - width) / 2, y0 = (image.height - height) / 2;
-  const int colour = image.channels >= 3 ? 3 : 1;
-  Eigen::MatrixXf out(static_cast<Eigen::Index>(width) * height, channels);
-  for (int r = 0; r < height; ++r)
-    for (int c = 0; c < width; ++c) {
-      const auto p = image.pixels.row(static_cast<Eigen::Index>(y0 + r) * image.width + x0 + c);
-      auto q = out.row(static_cast<Eigen::Index>(r) * width + c);
-      if (channels == 1)
-        q(0) = p.head(colour).mean();
-      else
-        for (int k = 0; k < 3; ++k) q(k) = p(colour == 3 ? k : 0);
-    }
-  return out;
-}
-
-double psnr_of(double mse, double peak = 1.0) {
-  return mse > 0 ? 10.0 * std::log10(peak * peak / mse) : std::numeric_limits<double>::infinity();
+// 10 log₁₀(Σ s² / Σ (ŝ − s)²) over every sample and channel.
+double snr_db(const Eigen::MatrixXd& fitted, const Eigen::MatrixXd& target) {
+  return 10.0 * std::log10(target.squaredNorm() / std::max((fitted - target).squaredNorm(), 1e-300));
 }
 
 class Fit final : public Problem {
@@ -157,16 +140,11 @@ class Fit final : public Problem {
 
   std::vector<std::pair<std::string, double>> progress_metrics(const OutputContext& context,
                                                                double) const override {
-    const Eigen::MatrixXd fitted = context.values(coordinates(progress_samples_));
-    double error = 0, power = 0;
-    for (Eigen::Index k = 0; k < progress_samples_.size(); ++k) {
-      const auto target = signal_.values.row(progress_samples_(k)).cast<double>();
-      error += (fitted.row(k) - target).squaredNorm();
-      power += target.squaredNorm();
-    }
-    const double mse = error / static_cast<double>(fitted.size());
-    if (signal_.kind == "audio") return {{"SNR dB", 10.0 * std::log10(power / std::max(error, 1e-300))}};
-    return {{"PSNR", psnr_of(mse)}};
+    const Eigen::MatrixXf fitted = context.values(coordinates(progress_samples_)).cast<float>();
+    Eigen::MatrixXf target(fitted.rows(), fitted.cols());
+    for (Eigen::Index k = 0; k < progress_samples_.size(); ++k) target.row(k) = signal_.values.row(progress_samples_(k));
+    if (signal_.kind == "audio") return {{"SNR dB", snr_db(fitted.cast<double>(), target.cast<double>())}};
+    return {{"PSNR", io::psnr(fitted, target)}};
   }
 
   void write_outputs(const OutputContext& context,
@@ -179,17 +157,17 @@ class Fit final : public Problem {
     const Eigen::MatrixXd error = fitted - target;
     const double max_abs = error.cwiseAbs().maxCoeff();
     metrics.emplace_back("max_abs_err", max_abs);
-    const double mse = error.squaredNorm() / static_cast<double>(error.size());
     if (signal_.kind == "audio") {
       write_audio_outputs(context, fitted.col(0), metrics);
       return;
     }
-    metrics.emplace_back("psnr_db", psnr_of(mse));
+    const Eigen::MatrixXf reconstruction = fitted.cast<float>();
+    const double psnr = io::psnr(reconstruction, signal_.values);
+    metrics.emplace_back("psnr_db", psnr);
     const Eigen::Index frame = static_cast<Eigen::Index>(signal_.width) * signal_.height;
     const io::ScalarImageOptions error_colours{std::pair{0.0, std::max(max_abs, 1e-12)}, io::Colormap::kViridis};
     const auto picture = [&](Eigen::Index f) {
-      return io::Image{signal_.width, signal_.height, signal_.channels,
-                       fitted.middleRows(f * frame, frame).cast<float>()};
+      return io::Image{signal_.width, signal_.height, signal_.channels, reconstruction.middleRows(f * frame, frame)};
     };
     const auto error_map = [&](Eigen::Index f) {
       const Eigen::VectorXd e = error.middleRows(f * frame, frame).cwiseAbs().rowwise().mean();
@@ -198,11 +176,10 @@ class Fit final : public Problem {
     };
     const bool ssim_possible = signal_.width >= 11 && signal_.height >= 11;
     if (signal_.kind == "image") {
-      if (ssim_possible)
-        metrics.emplace_back("ssim", io::ssim(picture(0).pixels, signal_.values, signal_.width, signal_.height));
+      if (ssim_possible) metrics.emplace_back("ssim", io::ssim(reconstruction, signal_.values, signal_.width, signal_.height));
       io::write_png(context.dir / "reconstruction.png", picture(0));
       io::write_scalar_png(context.dir / "error.png", error_map(0), error_colours);
-      std::printf("PSNR %.2f dB\n", psnr_of(mse));
+      std::printf("PSNR %.2f dB\n", psnr);
       return;
     }
     const fs::path dir = context.dir / "frames";
@@ -210,15 +187,14 @@ class Fit final : public Problem {
     double sum = 0, least = std::numeric_limits<double>::infinity(), ssim_sum = 0;
     char name[64];
     for (int f = 0; f < signal_.frames; ++f) {
-      const double frame_psnr = psnr_of(error.middleRows(f * frame, frame).squaredNorm() /
-                                        static_cast<double>(frame * signal_.channels));
+      const io::Image image = picture(f);
+      const auto truth = signal_.values.middleRows(f * frame, frame);
+      const double frame_psnr = io::psnr(image.pixels, truth);
       std::snprintf(name, sizeof name, "psnr_frame_%03d", f);
       metrics.emplace_back(name, frame_psnr);
       sum += frame_psnr;
       least = std::min(least, frame_psnr);
-      const io::Image image = picture(f);
-      if (ssim_possible)
-        ssim_sum += io::ssim(image.pixels, signal_.values.middleRows(f * frame, frame), signal_.width, signal_.height);
+      if (ssim_possible) ssim_sum += io::ssim(image.pixels, truth, signal_.width, signal_.height);
       std::snprintf(name, sizeof name, "reconstruction_%03d.png", f);
       io::write_png(dir / name, image);
       std::snprintf(name, sizeof name, "error_%03d.png", f);
@@ -326,7 +302,7 @@ class Fit final : public Problem {
                                          files.front().filename().string() + ", has " +
                                          std::to_string(source_width) + " x " + std::to_string(source_height));
       }
-      pictures.push_back(pixels_of(image, signal_.channels, width, height));
+      pictures.push_back(io::with_channels(io::central_crop(image, width, height), signal_.channels).pixels);
     }
     signal_.width = width;
     signal_.height = height;
@@ -384,9 +360,9 @@ class Fit final : public Problem {
                            std::vector<std::pair<std::string, double>>& metrics) const {
     const Eigen::VectorXd target = signal_.values.col(0).cast<double>();
     const Eigen::VectorXd error = fitted - target;
-    const double snr = 10.0 * std::log10(target.squaredNorm() / std::max(error.squaredNorm(), 1e-300));
+    const double snr = snr_db(fitted, target);
     metrics.emplace_back("snr_db", snr);
-    metrics.emplace_back("psnr_db", psnr_of(error.squaredNorm() / static_cast<double>(error.size())));
+    metrics.emplace_back("psnr_db", io::psnr(fitted.cast<float>(), signal_.values));
     metrics.emplace_back("sample_rate", signal_.sample_rate);
     metrics.emplace_back("samples", static_cast<double>(target.size()));
     io::write_audio(context.dir / "reconstruction.wav", io::AudioClip{signal_.sample_rate, fitted});

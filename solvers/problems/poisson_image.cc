@@ -36,14 +36,13 @@ class PoissonImage final : public Problem {
       throw equation.error("image", e.what());
     }
     equation.reject_unknown_keys();
-    width_ = crop > 0 ? std::min(crop, image.width) : image.width;
-    height_ = crop > 0 ? std::min(crop, image.height) : image.height;
-    const int x0 = (image.width - width_) / 2, y0 = (image.height - height_) / 2;
-    pixels_.resize(height_, width_);
-    for (int r = 0; r < height_; ++r)
-      for (int c = 0; c < width_; ++c)
-        pixels_(r, c) = image.pixels.row(static_cast<Eigen::Index>(y0 + r) * image.width + x0 + c)
-                            .head(std::min(image.channels, 3)).cast<double>().mean();
+    if (crop > 0) image = io::central_crop(image, crop, crop);
+    width_ = image.width;
+    height_ = image.height;
+    // Grey: the mean of the colour channels (alpha dropped), row r of the picture in row r.
+    const Eigen::VectorXf grey = io::with_channels(image, 1).pixels.col(0);
+    pixels_ = Eigen::Map<const Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+                  grey.data(), height_, width_).cast<double>();
     hx_ = 2.0 / (width_ - 1);
     hy_ = 2.0 / (height_ - 1);
   }

@@ -5,6 +5,8 @@
 #include <sndfile.h>
 
 #include <cmath>
+#include <filesystem>
+#include <limits>
 #include <numbers>
 #include <vector>
 
@@ -55,6 +57,31 @@ TEST(ReadAudio, NamesTheFileThatIsNotSound) {
     EXPECT_NE(std::string(e.what()).find("not_sound.wav"), std::string::npos) << e.what();
   }
   EXPECT_THROW(read_audio(testing::scratch_dir() / "missing.wav"), std::runtime_error);
+}
+
+TEST(WriteAudio, WritesSixteenBitWavThatReadsBackAtItsRateAndLength) {
+  const auto dir = testing::scratch_dir();
+  AudioClip clip{22050, Eigen::VectorXd::LinSpaced(1001, -1.0, 1.0)};
+  clip.samples(3) = 2.0;                                        // clipped to full scale
+  clip.samples(4) = std::numeric_limits<double>::quiet_NaN();  // written as 0
+  write_audio(dir / "ramp.wav", clip);
+  SF_INFO info{};
+  SNDFILE* file = sf_open((dir / "ramp.wav").c_str(), SFM_READ, &info);
+  ASSERT_NE(file, nullptr);
+  sf_close(file);
+  EXPECT_EQ(info.format, SF_FORMAT_WAV | SF_FORMAT_PCM_16);
+  EXPECT_EQ(info.channels, 1);
+  const AudioClip back = read_audio(dir / "ramp.wav");
+  EXPECT_EQ(back.sample_rate, 22050);
+  ASSERT_EQ(back.samples.size(), 1001);
+  clip.samples(3) = 1.0;
+  clip.samples(4) = 0.0;
+  // 16 bits: within a step of 2^-15 (libsndfile writes full scale as 32767, reads by 32768).
+  EXPECT_LT((back.samples - clip.samples).cwiseAbs().maxCoeff(), 1.5 / 32768);
+  EXPECT_THROW(write_audio(dir / "none.wav", AudioClip{22050, Eigen::VectorXd()}), std::invalid_argument);
+  EXPECT_THROW(write_audio(dir / "rate.wav", AudioClip{0, clip.samples}), std::invalid_argument);
+  EXPECT_THROW(write_audio(dir / "missing" / "ramp.wav", clip), std::runtime_error);
+  EXPECT_FALSE(std::filesystem::exists(dir / "none.wav"));
 }
 
 }  // namespace

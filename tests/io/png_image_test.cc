@@ -116,6 +116,31 @@ TEST(PngImage, Colormaps) {
   EXPECT_GT(diverging.pixels(2, 0), diverging.pixels(2, 2));  // reddish
 }
 
+// The central crop keeps rows and columns in place; the extra odd column goes at the right.
+TEST(PngImage, CentralCropAndChannels) {
+  Image image{5, 4, 4, Eigen::MatrixXf(20, 4)};
+  for (int i = 0; i < 20; ++i) image.pixels.row(i) << 0.01f * i, 0.2f, 0.3f, 0.9f;
+  const Image crop = central_crop(image, 2, 2);
+  ASSERT_EQ(crop.width, 2);
+  ASSERT_EQ(crop.height, 2);
+  EXPECT_EQ(crop.pixels.row(0), image.pixels.row(1 * 5 + 1));
+  EXPECT_EQ(crop.pixels.row(3), image.pixels.row(2 * 5 + 2));
+  EXPECT_EQ(central_crop(image, 10, 3).width, 5);
+  EXPECT_EQ(central_crop(image, 10, 3).height, 3);
+  const Image grey = with_channels(crop, 1);
+  ASSERT_EQ(grey.channels, 1);
+  EXPECT_FLOAT_EQ(grey.pixels(0, 0), (0.06f + 0.2f + 0.3f) / 3);  // alpha dropped
+  const Image rgb = with_channels(with_channels(image, 1), 3);
+  ASSERT_EQ(rgb.channels, 3);
+  EXPECT_EQ(rgb.pixels.col(0), rgb.pixels.col(2));
+  Image grey_alpha{1, 1, 2, Eigen::MatrixXf(1, 2)};
+  grey_alpha.pixels << 0.25f, 1.0f;
+  EXPECT_EQ(with_channels(grey_alpha, 1).pixels(0, 0), 0.25f);
+  EXPECT_EQ(with_channels(grey_alpha, 3).pixels(0, 1), 0.25f);
+  EXPECT_THROW(central_crop(image, 0, 2), std::invalid_argument);
+  EXPECT_THROW(with_channels(image, 2), std::invalid_argument);
+}
+
 TEST(PngImage, Errors) {
   const auto dir = scratch_dir();
   expect_error<std::runtime_error>([&] { read_png(dir / "none.png"); },

@@ -2,7 +2,8 @@
 //
 // Signal fitting (solvers/problems/fit.cc): the samples' coordinates and targets, a small
 // image fit far above the best constant image, short audio and video fits that write their
-// files (the WAV reads back at the clip's rate and length), and bad inputs located at their
+// files (the WAV reads back at the clip's rate and length;
+// io::write_audio itself: tests/io/audio_test.cc), and bad inputs located at their
 // keys.
 #include <gtest/gtest.h>
 
@@ -155,20 +156,6 @@ training:
   EXPECT_EQ(clip.sample_rate, 16000);
   EXPECT_EQ(clip.samples.size(), 800);
   EXPECT_TRUE(fs::exists(out / "waveform.png"));
-}
-
-TEST(Fit, WrittenAudioReadsBackSampleForSample) {
-  const fs::path dir = testutil::scratch_dir("fit");
-  io::AudioClip clip{22050, Eigen::VectorXd::LinSpaced(1001, -1.0, 1.0)};
-  clip.samples(3) = 2.0;  // clipped to full scale
-  io::write_audio(dir / "ramp.wav", clip);
-  const io::AudioClip back = io::read_audio(dir / "ramp.wav");
-  EXPECT_EQ(back.sample_rate, 22050);
-  ASSERT_EQ(back.samples.size(), 1001);
-  clip.samples(3) = 1.0;
-  EXPECT_LT((back.samples - clip.samples).cwiseAbs().maxCoeff(), 1.0 / 32767);
-  EXPECT_THROW(io::write_audio(dir / "none.wav", io::AudioClip{22050, Eigen::VectorXd()}), std::invalid_argument);
-  EXPECT_THROW(io::write_audio(dir / "missing/ramp.wav", clip), std::runtime_error);
 }
 
 TEST(Fit, VideoFitWritesFramesAndPerFramePsnrs) {
