@@ -32,6 +32,14 @@ AudioClip read_audio(const std::filesystem::path& path) {
   return clip;
 }
 
+SampleRange samples_between(const AudioClip& clip, double start, double end) {
+  SampleRange range;
+  range.first = static_cast<Eigen::Index>(std::floor(start * clip.sample_rate));
+  range.count = std::min<Eigen::Index>(static_cast<Eigen::Index>(std::ceil(end * clip.sample_rate)),
+                                       clip.samples.size()) - range.first;
+  return range;
+}
+
 void write_audio(const std::filesystem::path& path, const AudioClip& clip) {
   if (clip.samples.size() == 0) throw std::invalid_argument("write_audio: the clip holds no samples");
   const double rate = std::round(clip.sample_rate);

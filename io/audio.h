@@ -17,6 +17,14 @@ struct AudioClip {
   double seconds() const { return sample_rate > 0 ? static_cast<double>(samples.size()) / sample_rate : 0; }
 };
 
+// The samples [first, first + count) of `clip` that cover [start, end] seconds:
+// first = ⌊start · rate⌋, the last before ⌈end · rate⌉ (at most the clip's end). The caller
+// checks 0 ≤ start < end ≤ clip.seconds().
+struct SampleRange {
+  Eigen::Index first = 0, count = 0;
+};
+SampleRange samples_between(const AudioClip& clip, double start, double end);
+
 // Throws std::runtime_error naming `path` and libsndfile's reason when the file is missing,
 // not a sound file, or holds no samples.
 AudioClip read_audio(const std::filesystem::path& path);

@@ -220,9 +220,9 @@ class Fit final : public Problem {
       equation.require("seconds", 0 <= span[0] && span[0] < span[1] && span[1] <= clip.seconds(),
                        "expected [start, end] with 0 <= start < end <= " + std::to_string(clip.seconds()) +
                            " (the clip's length in seconds)");
-      first = static_cast<Eigen::Index>(std::floor(span[0] * clip.sample_rate));
-      count = std::min<Eigen::Index>(static_cast<Eigen::Index>(std::ceil(span[1] * clip.sample_rate)),
-                                     clip.samples.size()) - first;
+      const io::SampleRange range = io::samples_between(clip, span[0], span[1]);
+      first = range.first;
+      count = range.count;
     }
     equation.require(equation.has("seconds") ? "seconds" : "path", count >= 2,
                      "the clip has fewer than two samples there");
