@@ -42,11 +42,14 @@
 // blue); video: frames/reconstruction_NNN.png and frames/error_NNN.png (one viridis range,
 // 0 to max_abs_err, for all frames). Every file is written atomically.
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <limits>
-#include <numeric>
+#include <optional>
+#include <string>
+#include <vector>
 
 #include "io/audio.h"
 #include "io/image_metrics.h"
@@ -61,8 +64,10 @@ namespace fs = std::filesystem;
 
 // Samples on a regular lattice: index (f·height + r)·width + c, with c the fastest axis
 // (audio: c the sample, height = frames = 1).
+enum class Kind { kImage, kAudio, kVideo };
+
 struct Signal {
-  std::string kind;  // image, audio, video
+  Kind kind = Kind::kImage;
   int width = 1, height = 1, frames = 1;
   int channels = 1;
   double sample_rate = 0;       // audio
@@ -79,16 +84,17 @@ class Fit final : public Problem {
  public:
   explicit Fit(const ProblemContext& context) : domain_({-1.0}, {1.0}) {
     const io::ConfigNode equation = context.root.child("equation");
-    signal_.kind = equation.get_choice("signal", {"image", "audio", "video"});
+    const std::string kind = equation.get_choice("signal", {"image", "audio", "video"});
+    signal_.kind = kind == "audio" ? Kind::kAudio : kind == "video" ? Kind::kVideo : Kind::kImage;
     const fs::path path = context.config_dir / equation.get<std::string>("path");
-    if (signal_.kind == "audio")
+    if (signal_.kind == Kind::kAudio)
       read_audio(equation, path);
     else
       read_pictures(equation, path);
     equation.reject_unknown_keys();
-    if (signal_.kind == "image")
+    if (signal_.kind == Kind::kImage)
       domain_ = Domain({-1.0, -1.0}, {1.0, 1.0});
-    else if (signal_.kind == "audio")
+    else if (signal_.kind == Kind::kAudio)
       domain_ = Domain({-time_scale_}, {time_scale_});
     else
       domain_ = Domain({-1.0, -1.0}, {1.0, 1.0}, std::pair{-time_scale_, time_scale_});
@@ -102,7 +108,7 @@ class Fit final : public Problem {
   int output_dim() const override { return signal_.channels; }
   std::vector<std::string> output_names() const override {
     if (signal_.channels == 3) return {"red", "green", "blue"};
-    return {signal_.kind == "audio" ? "amplitude" : "grey"};
+    return {signal_.kind == Kind::kAudio ? "amplitude" : "grey"};
   }
   int residual_term() const override { return -1; }
   bool writes_grid_outputs() const override { return false; }
@@ -143,7 +149,7 @@ class Fit final : public Problem {
     const Eigen::MatrixXf fitted = context.values(coordinates(progress_samples_)).cast<float>();
     Eigen::MatrixXf target(fitted.rows(), fitted.cols());
     for (Eigen::Index k = 0; k < progress_samples_.size(); ++k) target.row(k) = signal_.values.row(progress_samples_(k));
-    if (signal_.kind == "audio") return {{"SNR dB", snr_db(fitted.cast<double>(), target.cast<double>())}};
+    if (signal_.kind == Kind::kAudio) return {{"SNR dB", snr_db(fitted.cast<double>(), target.cast<double>())}};
     return {{"PSNR", io::psnr(fitted, target)}};
   }
 
@@ -152,12 +158,12 @@ class Fit final : public Problem {
     Eigen::MatrixXd fitted = evaluate_all(context);
     const Eigen::MatrixXd target = signal_.values.cast<double>();
     metrics.emplace_back("rel_l2", (fitted - target).norm() / target.norm());
-    const double low = signal_.kind == "audio" ? -1.0 : 0.0;
+    const double low = signal_.kind == Kind::kAudio ? -1.0 : 0.0;
     fitted = fitted.cwiseMax(low).cwiseMin(1.0);
     const Eigen::MatrixXd error = fitted - target;
     const double max_abs = error.cwiseAbs().maxCoeff();
     metrics.emplace_back("max_abs_err", max_abs);
-    if (signal_.kind == "audio") {
+    if (signal_.kind == Kind::kAudio) {
       write_audio_outputs(context, fitted.col(0), metrics);
       return;
     }
@@ -175,7 +181,7 @@ class Fit final : public Problem {
           e.data(), signal_.height, signal_.width));
     };
     const bool ssim_possible = signal_.width >= 11 && signal_.height >= 11;
-    if (signal_.kind == "image") {
+    if (signal_.kind == Kind::kImage) {
       if (ssim_possible) metrics.emplace_back("ssim", io::ssim(reconstruction, signal_.values, signal_.width, signal_.height));
       io::write_png(context.dir / "reconstruction.png", picture(0));
       io::write_scalar_png(context.dir / "error.png", error_map(0), error_colours);
@@ -239,7 +245,7 @@ class Fit final : public Problem {
 
   // An image, or a video's frames: the PNG files of a folder in name order.
   void read_pictures(const io::ConfigNode& equation, const fs::path& path) {
-    const bool video = signal_.kind == "video";
+    const bool video = signal_.kind == Kind::kVideo;
     const std::string channels = equation.get_choice("channels", {"auto", "grey", "rgb"}, "auto");
     std::optional<std::pair<int, int>> crop;
     if (equation.has("crop")) {
@@ -325,21 +331,21 @@ class Fit final : public Problem {
     const Eigen::Index w = signal_.width, h = signal_.height;
     for (Eigen::Index i = 0; i < index.size(); ++i) {
       const Eigen::Index k = index(i);
-      if (signal_.kind == "audio") {
+      if (signal_.kind == Kind::kAudio) {
         x(i, 0) = time_scale_ * centre(k, signal_.width);
         continue;
       }
       x(i, 0) = centre(k % w, signal_.width);
       x(i, 1) = -centre((k / w) % h, signal_.height);  // row 0 at the top: y up
-      if (signal_.kind == "video") x(i, 2) = time_scale_ * centre(k / (w * h), signal_.frames);
+      if (signal_.kind == Kind::kVideo) x(i, 2) = time_scale_ * centre(k / (w * h), signal_.frames);
     }
     return x;
   }
 
   Eigen::Index index_of(const Eigen::Ref<const Eigen::RowVectorXd>& x) const {
-    if (signal_.kind == "audio") return sample_at(x(0) / time_scale_, signal_.width);
+    if (signal_.kind == Kind::kAudio) return sample_at(x(0) / time_scale_, signal_.width);
     const Eigen::Index c = sample_at(x(0), signal_.width), r = sample_at(-x(1), signal_.height);
-    const Eigen::Index f = signal_.kind == "video" ? sample_at(x(2) / time_scale_, signal_.frames) : 0;
+    const Eigen::Index f = signal_.kind == Kind::kVideo ? sample_at(x(2) / time_scale_, signal_.frames) : 0;
     return (f * signal_.height + r) * signal_.width + c;
   }
 
