@@ -22,6 +22,8 @@
 // x right and y up; t for audio (the field's one input, named x in `field:` keys); (x, y, t)
 // for a video, t over the frames. The values are the pixels' channels in [0, 1], or the
 // clip's samples in [-1, 1] (channels averaged). `domain` and `conditions` are not read.
+// A hash grid (fields/hash_grid.h) over this box with N cells across an axis of N samples
+// has its vertices on the samples: p = N (u + 1)/2 + 1/2 = k + 1 at u = -1 + (2k + 1)/N.
 //
 // Training: one loss term `signal` (batch `interior`): random samples, drawn with
 // replacement (all of them, in order, when the batch is at least their count), and the
