@@ -67,16 +67,25 @@ double mean_alignment(const Eigen::MatrixXd& normals, const Eigen::MatrixXd& fac
   return normals.rows() > 0 ? sum / static_cast<double>(normals.rows()) : 0.0;
 }
 
+// The mesh as VTK polydata with its cell locator, built once before the threads query it.
+struct Located {
+  vtkSmartPointer<vtkPolyData> poly;
+  vtkNew<vtkStaticCellLocator> locator;
+  explicit Located(const TriangleMesh& mesh)
+      : poly(to_vtk_polydata(PolyData{mesh.vertices, {}, mesh.triangles, {}}, Precision::kFloat64)) {
+    locator->SetDataSet(poly);
+    locator->BuildLocator();
+  }
+};
+
 }  // namespace
 
 ClosestTriangles closest_triangles(const Eigen::MatrixXd& points, const TriangleMesh& mesh) {
   if (mesh.triangles.rows() == 0)
     throw std::invalid_argument("mesh_distance: the mesh has no triangles");
   if (points.cols() != 3) throw std::invalid_argument("mesh_distance: points need 3 columns");
-  auto poly = to_vtk_polydata(PolyData{mesh.vertices, {}, mesh.triangles, {}}, Precision::kFloat64);
-  vtkNew<vtkStaticCellLocator> locator;
-  locator->SetDataSet(poly);
-  locator->BuildLocator();
+  const Located located(mesh);
+  vtkStaticCellLocator* locator = located.locator;
   ClosestTriangles out{Eigen::VectorXd(points.rows()), Eigen::VectorXi(points.rows())};
 #pragma omp parallel
   {
@@ -118,10 +127,8 @@ Eigen::Array<bool, Eigen::Dynamic, 1> near_mesh(const Eigen::MatrixXd& points, c
                                                 double radius) {
   if (mesh.triangles.rows() == 0) throw std::invalid_argument("near_mesh: the mesh has no triangles");
   if (points.cols() != 3) throw std::invalid_argument("near_mesh: points need 3 columns");
-  auto poly = to_vtk_polydata(PolyData{mesh.vertices, {}, mesh.triangles, {}}, Precision::kFloat64);
-  vtkNew<vtkStaticCellLocator> locator;
-  locator->SetDataSet(poly);
-  locator->BuildLocator();
+  const Located located(mesh);
+  vtkStaticCellLocator* locator = located.locator;
   Eigen::Array<bool, Eigen::Dynamic, 1> out(points.rows());
 #pragma omp parallel
   {
@@ -139,10 +146,8 @@ Eigen::Array<bool, Eigen::Dynamic, 1> near_mesh(const Eigen::MatrixXd& points, c
 
 Eigen::Array<bool, Eigen::Dynamic, 1> grid_near_mesh(const Grid& grid, const TriangleMesh& mesh, double radius) {
   if (mesh.triangles.rows() == 0) throw std::invalid_argument("grid_near_mesh: the mesh has no triangles");
-  auto poly = to_vtk_polydata(PolyData{mesh.vertices, {}, mesh.triangles, {}}, Precision::kFloat64);
-  vtkNew<vtkStaticCellLocator> locator;
-  locator->SetDataSet(poly);
-  locator->BuildLocator();
+  const Located located(mesh);
+  vtkStaticCellLocator* locator = located.locator;
   struct Block {
     std::array<int, 3> first, count;  // grid indices [first, first + count) per axis
   };

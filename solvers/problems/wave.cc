@@ -80,9 +80,7 @@ class Wave final : public Problem {
           std::printf("wave reference: step %ld/%ld\n", n, total);
           std::fflush(stdout);
         });
-      } catch (const std::invalid_argument& e) {
-        throw equation.error("reference", e.what());
-      } catch (const std::runtime_error& e) {
+      } catch (const std::exception& e) {  // invalid options, or a speed ≤ 0 at a node
         throw equation.error("reference", e.what());
       }
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();

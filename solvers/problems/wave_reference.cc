@@ -104,34 +104,39 @@ WaveReference::WaveReference(const Domain& domain, const WaveReferenceData& data
   for (std::size_t k = 0; k < ghosts.size(); ++k) ghost_points.row(k) = points.row(ghosts[k].node);
 
   const auto at_time = [&](Eigen::MatrixXd& p, double t) { p.col(t_col).setConstant(t); };
+  // Per face, once: the entries it sets (of the Dirichlet values, or of the ghost terms of a
+  // Neumann face) and their points.
+  struct FaceNodes {
+    std::vector<Eigen::Index> rows;
+    Eigen::MatrixXd points;
+  };
+  std::vector<FaceNodes> face_nodes(2 * dim_);
+  for (int f = 0; f < 2 * dim_; ++f) {
+    FaceNodes& nodes_of_face = face_nodes[f];
+    const bool dirichlet_face_kind = data.faces[f]->dirichlet;
+    const Eigen::MatrixXd& all = dirichlet_face_kind ? dirichlet_points : ghost_points;
+    const std::size_t count = dirichlet_face_kind ? dirichlet_nodes.size() : ghosts.size();
+    for (std::size_t k = 0; k < count; ++k)
+      if ((dirichlet_face_kind ? dirichlet_face[k] : ghosts[k].face) == f)
+        nodes_of_face.rows.push_back(static_cast<Eigen::Index>(k));
+    nodes_of_face.points.resize(static_cast<Eigen::Index>(nodes_of_face.rows.size()), dim_ + 1);
+    for (std::size_t r = 0; r < nodes_of_face.rows.size(); ++r)
+      nodes_of_face.points.row(r) = all.row(nodes_of_face.rows[r]);
+  }
   const auto evaluate_boundary = [&](double t, Eigen::VectorXd& dirichlet, Eigen::VectorXd& ghost_term) {
-    at_time(dirichlet_points, t);
-    at_time(ghost_points, t);
     dirichlet.setZero(static_cast<Eigen::Index>(dirichlet_nodes.size()));
+    ghost_term.setZero(static_cast<Eigen::Index>(ghosts.size()));
     for (int f = 0; f < 2 * dim_; ++f) {
-      const WaveFaceCondition& face = *data.faces[f];
-      std::vector<Eigen::Index> rows;
-      if (face.dirichlet) {
-        for (std::size_t k = 0; k < dirichlet_nodes.size(); ++k)
-          if (dirichlet_face[k] == f) rows.push_back(static_cast<Eigen::Index>(k));
-        Eigen::MatrixXd p(static_cast<Eigen::Index>(rows.size()), dim_ + 1);
-        for (std::size_t r = 0; r < rows.size(); ++r) p.row(r) = dirichlet_points.row(rows[r]);
-        const Eigen::VectorXd g = face.value.evaluate(p);
-        for (std::size_t r = 0; r < rows.size(); ++r) dirichlet(rows[r]) = g(r);
+      FaceNodes& nodes_of_face = face_nodes[f];
+      at_time(nodes_of_face.points, t);
+      const Eigen::VectorXd g = data.faces[f]->value.evaluate(nodes_of_face.points);
+      for (std::size_t r = 0; r < nodes_of_face.rows.size(); ++r) {
+        const Eigen::Index row = nodes_of_face.rows[r];
+        if (data.faces[f]->dirichlet)
+          dirichlet(row) = g(r);
+        else
+          ghost_term(row) = 2.0 * g(r) / h_[ghosts[row].axis];
       }
-    }
-    ghost_term.resize(static_cast<Eigen::Index>(ghosts.size()));
-    for (int f = 0; f < 2 * dim_; ++f) {
-      const WaveFaceCondition& face = *data.faces[f];
-      if (face.dirichlet) continue;
-      std::vector<Eigen::Index> rows;
-      for (std::size_t k = 0; k < ghosts.size(); ++k)
-        if (ghosts[k].face == f) rows.push_back(static_cast<Eigen::Index>(k));
-      Eigen::MatrixXd p(static_cast<Eigen::Index>(rows.size()), dim_ + 1);
-      for (std::size_t r = 0; r < rows.size(); ++r) p.row(r) = ghost_points.row(rows[r]);
-      const Eigen::VectorXd g = face.value.evaluate(p);
-      for (std::size_t r = 0; r < rows.size(); ++r)
-        ghost_term(rows[r]) = 2.0 * g(r) / h_[ghosts[rows[r]].axis];
     }
   };
 
