@@ -123,6 +123,19 @@ Image central_crop(const Image& image, int width, int height) {
   return out;
 }
 
+Image box_downsample(const Image& image, int factor) {
+  if (factor < 1 || factor > image.width || factor > image.height)
+    throw std::invalid_argument("box_downsample: a factor of " + std::to_string(factor) + " for a " +
+                                std::to_string(image.width) + " x " + std::to_string(image.height) + " picture");
+  const int width = image.width / factor, height = image.height / factor;
+  Image out{width, height, image.channels, Eigen::MatrixXf::Zero(Eigen::Index{width} * height, image.channels)};
+  for (int r = 0; r < height * factor; ++r)
+    for (int c = 0; c < width * factor; ++c)
+      out.pixels.row(Eigen::Index{r / factor} * width + c / factor) += image.pixels.row(Eigen::Index{r} * image.width + c);
+  out.pixels /= static_cast<float>(factor * factor);
+  return out;
+}
+
 Image with_channels(const Image& image, int channels) {
   if (channels != 1 && channels != 3)
     throw std::invalid_argument("with_channels: " + std::to_string(channels) + " channels (expected 1 or 3)");

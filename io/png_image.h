@@ -32,6 +32,12 @@ void write_png(const std::filesystem::path& path, const Image& image);
 // Throws std::invalid_argument when width or height is below 1.
 Image central_crop(const Image& image, int width, int height);
 
+// The picture shrunk by an integer factor: each pixel the mean of a factor × factor block
+// (area averaging, as a camera with larger pixels would see it). Rows and columns past the
+// last whole block are dropped. Throws std::invalid_argument for a factor below 1 or above
+// either side.
+Image box_downsample(const Image& image, int factor);
+
 // The picture with 1 channel (grey: the mean of R, G and B, or the grey channel) or 3 (RGB: a
 // grey channel repeated); alpha is dropped. Throws std::invalid_argument for other counts.
 Image with_channels(const Image& image, int channels);

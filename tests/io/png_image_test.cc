@@ -116,6 +116,21 @@ TEST(PngImage, Colormaps) {
   EXPECT_GT(diverging.pixels(2, 0), diverging.pixels(2, 2));  // reddish
 }
 
+// Each output pixel is its block's mean; the row and column past the last whole block go.
+TEST(PngImage, BoxDownsample) {
+  Image image{5, 4, 1, Eigen::MatrixXf(20, 1)};
+  for (int i = 0; i < 20; ++i) image.pixels(i, 0) = static_cast<float>(i);
+  const Image half = box_downsample(image, 2);
+  ASSERT_EQ(half.width, 2);
+  ASSERT_EQ(half.height, 2);
+  EXPECT_FLOAT_EQ(half.pixels(0, 0), (0 + 1 + 5 + 6) / 4.f);
+  EXPECT_FLOAT_EQ(half.pixels(1, 0), (2 + 3 + 7 + 8) / 4.f);
+  EXPECT_FLOAT_EQ(half.pixels(3, 0), (12 + 13 + 17 + 18) / 4.f);
+  EXPECT_EQ(box_downsample(image, 1).pixels, image.pixels);
+  EXPECT_THROW(box_downsample(image, 0), std::invalid_argument);
+  EXPECT_THROW(box_downsample(image, 5), std::invalid_argument);
+}
+
 // The central crop keeps rows and columns in place; the extra odd column goes at the right.
 TEST(PngImage, CentralCropAndChannels) {
   Image image{5, 4, 4, Eigen::MatrixXf(20, 4)};
