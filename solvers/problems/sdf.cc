@@ -18,6 +18,7 @@
 //     off_surface_weight: 100
 //     off_surface_alpha: 100   # α of the off-surface penalty exp(−α|u|)
 //     reference_mesh: ../data/meshes/bunny00.ply   # optional: error metrics against it
+//     box_weight: 0            # > 0: the "box" term below (training.batch.box points a step)
 //
 //     loss: siren              # siren | squares (below)
 //
@@ -28,6 +29,8 @@
 //   "interior"  batch `interior`: uniform points in the domain,
 //               ‖r‖² = w_eikonal ||∇u| − 1| + w_off exp(−α|u|),
 //               r = [√w_eikonal ρ(|∇u| − 1),  √w_off exp(−α|u|/2)],
+//   "box"       (only with box_weight > 0) batch `box`: points on the domain's faces,
+//               r = √w_box (u − d(x)), d the distance to the nearest cloud point.
 // with ρ(x) = sign(x) √|x|, so that these are exactly the per-point losses of SIREN's
 // reference code (its means of |u| weighted 3e3, of 1 − cos 1e2, of ||∇u| − 1| 5e1, of
 // exp(−α|u|) 1e2 with α = 100; (ĝ − n)²/2 = 1 − cos). `loss: squares` takes ρ(x) = x
@@ -35,6 +38,14 @@
 // about 4 times less accurately with these weights, as small errors then cost little.
 // The term weights themselves are 1 (the w_* are inside the residuals). ∂|g|/∂g and ∂ĝ/∂g
 // are taken as 0 where |g| = 0, ∂|u|/∂u as 0 at u = 0, and ρ'(0) as 0.
+//
+// Why the box term: nothing in SIREN's loss fixes the sign far from the cloud, and a level
+// set that bends back towards the box's edges (where few interior samples fall per unit of
+// face) leaves spurious pieces there. With the normalized cloud inside the domain (margin
+// > 0), the faces are outside the shape and the SDF there is the distance to the surface,
+// which the distance to the nearest cloud point approximates from above by at most half the
+// point spacing. The face points come from a pool of 6 × 96² stratified points whose
+// distances are computed once (vtkStaticPointLocator); a step draws from it.
 //
 // The surface residual finds each point's normal by the point's exact coordinates (the
 // samples are copies of cloud points); other points get the normal of the nearest cloud
@@ -180,7 +191,13 @@ class Sdf final : public Problem {
       }
       equation.require("reference_mesh", reference_->triangles.rows() > 0, "expected a mesh with triangles");
     }
+    box_weight_ = equation.has("box_weight") ? equation.get_nonnegative<double>("box_weight") : 0.0;
     equation.reject_unknown_keys();
+    if (box_weight_ > 0) {
+      equation.require("box_weight", !normalize_ || margin_ > 0,
+                       "the box term needs the cloud strictly inside the domain: margin > 0");
+      make_box_pool();
+    }
   }
 
   const Domain& domain() const override { return domain_; }
@@ -210,7 +227,32 @@ class Sdf final : public Problem {
     interior.residual = [this](const Eigen::MatrixXd&) -> std::unique_ptr<Residual> {
       return make_sdf_residual(Eigen::MatrixXd(), false, weights_);
     };
-    return {surface, interior};
+    if (box_weight_ == 0) return {surface, interior};
+    LossTerm box;
+    box.name = "box";
+    box.batch_key = "box";
+    box.spec = autodiff::StreamSpec::values(3);
+    box.sample = [this](Random& rng, Eigen::Index n) {
+      Eigen::MatrixXd x(n, 3);
+      const auto count = static_cast<double>(box_points_.rows());
+      for (Eigen::Index p = 0; p < n; ++p)
+        x.row(p) = box_points_.row(std::min(box_points_.rows() - 1, static_cast<Eigen::Index>(uniform01(rng) * count)));
+      return x;
+    };
+    box.residual = [this](const Eigen::MatrixXd& x) -> std::unique_ptr<Residual> {
+      const double root = std::sqrt(box_weight_);
+      Eigen::MatrixXd target(x.rows(), 1);
+      for (Eigen::Index p = 0; p < x.rows(); ++p) {
+        const Eigen::RowVector3d row = x.row(p);
+        const auto it = box_index_.find(key_of(row.data()));
+        // Not a pool point (a checkpoint of another pool): the distance computed now.
+        target(p, 0) = root * (it != box_index_.end() ? box_distances_(it->second)
+                                                      : io::point_cloud_distance(row, points_)(0));
+      }
+      return std::make_unique<LinearResidual>(
+          std::vector<LinearResidual::Term>{{0, 0, 0, Eigen::VectorXd::Constant(1, root)}}, target);
+    };
+    return {surface, interior, box};
   }
 
   void write_outputs(const OutputContext& context,
@@ -304,6 +346,28 @@ class Sdf final : public Problem {
   }
 
  private:
+  // 6 faces × 96² points, one per cell of a 96 × 96 grid on each face (jittered, seed fixed).
+  void make_box_pool() {
+    constexpr int kSide = 96;
+    const Eigen::Vector3d lower(domain_.lower().data()), upper(domain_.upper().data());
+    box_points_.resize(6 * kSide * kSide, 3);
+    Random rng(20261124);
+    Eigen::Index row = 0;
+    for (int axis = 0; axis < 3; ++axis)
+      for (int side = 0; side < 2; ++side)
+        for (int i = 0; i < kSide; ++i)
+          for (int j = 0; j < kSide; ++j) {
+            const int a = (axis + 1) % 3, b = (axis + 2) % 3;
+            Eigen::RowVector3d p;
+            p(axis) = side == 0 ? lower(axis) : upper(axis);
+            p(a) = lower(a) + (upper(a) - lower(a)) * (i + uniform01(rng)) / kSide;
+            p(b) = lower(b) + (upper(b) - lower(b)) * (j + uniform01(rng)) / kSide;
+            box_points_.row(row++) = p;
+          }
+    box_distances_ = io::point_cloud_distance(box_points_, points_);
+    for (Eigen::Index p = 0; p < box_points_.rows(); ++p) box_index_.emplace(key_of(box_points_.row(p).eval().data()), p);
+  }
+
   // Domain coordinates → the cloud's own.
   Eigen::MatrixXd to_original(const Eigen::MatrixXd& x) const {
     if (!normalize_) return x;
@@ -334,6 +398,10 @@ class Sdf final : public Problem {
   double margin_ = 0.1, scale_ = 1;
   Eigen::Vector3d center_ = Eigen::Vector3d::Zero(), domain_center_ = Eigen::Vector3d::Zero();
   SdfWeights weights_;
+  double box_weight_ = 0;
+  Eigen::MatrixXd box_points_;  // the face pool, domain coordinates
+  Eigen::VectorXd box_distances_;
+  std::unordered_map<PointKey, Eigen::Index, PointKeyHash> box_index_;
   std::shared_ptr<io::TriangleMesh> reference_;
 };
 

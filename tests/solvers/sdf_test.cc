@@ -186,6 +186,53 @@ TEST(Sdf, ResidualAdjointsMatchFiniteDifferences) {
   }
 }
 
+// The box term: points on the domain's faces, each residual √w (u − d) with d the distance
+// to the nearest cloud point; for a dense sphere cloud d ≈ |x| − r from above.
+TEST(Sdf, BoxTermPullsTheFacesToTheCloudDistance) {
+  const auto cloud = write_sphere_cloud("box", 4000, 0.5);
+  const RunSetup setup = load_run(
+      write_config("box", "problem: sdf\nequation: {points: " + cloud.string() +
+                              ", normalize: false, box_weight: 4}\ntraining: {batch: {surface: 8, interior: 8, box: 8}}\n"),
+      {});
+  const auto terms = setup.problem->loss_terms();
+  ASSERT_EQ(terms.size(), 3u);
+  EXPECT_EQ(terms[2].name, "box");
+  Random rng(7);
+  const Eigen::MatrixXd x = terms[2].sample(rng, 500);
+  // On a face: one coordinate is ±1, the others inside.
+  EXPECT_LT((x.cwiseAbs().rowwise().maxCoeff().array() - 1.0).abs().maxCoeff(), 1e-15);
+  // Every face is drawn.
+  for (int axis = 0; axis < 3; ++axis)
+    for (double side : {-1.0, 1.0}) EXPECT_TRUE((x.col(axis).array() == side).any()) << axis << " " << side;
+  const autodiff::StreamLayout layout(terms[2].spec);
+  Eigen::MatrixXd r;
+  // u = |x| − r: the residual is 2 (u − d), with d − (|x| − r) in [0, spacing/2).
+  // The term reads values only: one stream.
+  ASSERT_EQ(layout.count(), 1);
+  const auto values = [](const Eigen::MatrixXd& at) {
+    autodiff::Streams<double> s;
+    s.resize(at.rows(), 1, 1);
+    s.stream(0).col(0) = at.rowwise().norm().array() - 0.5;
+    return s;
+  };
+  terms[2].residual(x)->evaluate(0, layout, values(x), r);
+  ASSERT_EQ(r.cols(), 1);
+  EXPECT_LE(r.maxCoeff(), 1e-12);
+  EXPECT_GT(r.minCoeff(), -2 * 0.02);
+  // A point that is not in the pool gets its distance computed on the spot.
+  const Eigen::MatrixXd off = Eigen::RowVector3d(1.0, 0.0, 0.0);
+  terms[2].residual(off)->evaluate(0, layout, values(off), r);
+  EXPECT_LE(r(0, 0), 1e-12);
+  EXPECT_GT(r(0, 0), -2 * 0.02);
+  // Without the weight, no box term; with margin 0, none can be placed outside the shape.
+  EXPECT_THROW(load_run(write_config("box_margin", "problem: sdf\nequation: {points: " + cloud.string() +
+                                                       ", margin: 0, box_weight: 1}\n"), {}),
+               io::ConfigError);
+  EXPECT_THROW(load_run(write_config("box_negative", "problem: sdf\nequation: {points: " + cloud.string() +
+                                                         ", box_weight: -1}\n"), {}),
+               io::ConfigError);
+}
+
 TEST(Sdf, NormalizationAndConfigErrors) {
   // A cloud far outside [−1, 1]³ is moved and scaled in with the margin.
   const auto cloud = write_sphere_cloud("far", 200, 10, Eigen::Vector3d(100, -50, 3));
