@@ -59,21 +59,24 @@ class TrainingStage {
   // Σ_k w_k λ_k/N_k Σ‖r‖² at `params` and its gradient (overwritten); keeps the term losses.
   double loss_and_gradient(const Scalar* params, Scalar* gradient);
 
-  // Per-step sampling of a first-order method, before each step: RAR refinement and new
-  // points when they are due (adaptive.every, resample_every), the causal weights.
+  // Per-step sampling of a first-order method, before each step: new points when they are
+  // due (resample_every, or a training strategy such as RAR asks), then the strategies'
+  // weights at the current parameters (causal weights).
   void prepare_step();
-  // The gradient of that step at the field's parameters: loss_and_gradient, or, on the steps
-  // training.balance updates λ, the terms' gradients taken one by one.
+  // The gradient of that step at the field's parameters: loss_and_gradient, or the one a
+  // strategy takes on its steps (training.balance: the terms' gradients one by one).
   void step_gradient(Scalar* gradient);
 
   // A method that keeps one objective over many iterations (a line search, a least-squares
   // problem) runs in segments between which the objective may change:
   void draw_points();               // new points for every term
-  bool causal() const;              // training.causal is on
-  void update_causal_weights();
+  // The strategies' weights at the current parameters and points (training.causal); no-op
+  // when none has any.
+  void update_weights();
   // Iterations per segment: the whole stage, or fewer where the points change
-  // (resample_every of the stage, adaptive.every) or, with_causal, the causal weights.
-  int segment_length(int resample_every, bool with_causal) const;
+  // (resample_every of the stage, adaptive.every) or, when the optimizer calls update_weights
+  // between segments (`reweighted`), the weights do (causal.every).
+  int segment_length(int resample_every, bool reweighted) const;
   // Whether the stage is over after a segment that began at step segment_start: all its steps
   // are taken, or the segment ended `early` (no decrease found) and either the stage has no
   // further segments or the segment made no step at all.

@@ -287,7 +287,7 @@ class LbfgsOptimizer final : public OptimizerOf<LbfgsOptimizer, LbfgsStageOption
     // of `every` iterations: a line search needs one objective. Each segment restarts Ceres
     // (and so the L-BFGS history) on the updated objective.
     const int segment = stage.segment_length(options.resample_every, true);
-    if (stage.causal()) stage.update_causal_weights();
+    stage.update_weights();
     fields::Field<Scalar>& field = stage.field();
     Eigen::VectorXd theta = field.parameters().template cast<double>();
     auto* function = new LossFunction<Scalar>(
@@ -323,7 +323,7 @@ class LbfgsOptimizer final : public OptimizerOf<LbfgsOptimizer, LbfgsStageOption
       const bool early = summary.termination_type != ceres::NO_CONVERGENCE;
       if (stopped || stage.ends_after_segment(segment, segment_start, early)) break;
       stage.renew_points(options.resample_every);
-      if (stage.causal()) stage.update_causal_weights();
+      stage.update_weights();
     }
     if (!stopped) stage.finish_early();
     return !stopped;

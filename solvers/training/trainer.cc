@@ -9,6 +9,8 @@
 #include <stdexcept>
 
 #include "solvers/conditions/hard_constraints.h"
+#include "solvers/training/adaptive_refinement.h"
+#include "solvers/training/causal_weighting.h"
 
 namespace nfield::solvers {
 namespace {
@@ -18,6 +20,36 @@ double now_seconds() {
 }
 
 }  // namespace
+
+template <typename Scalar>
+class Trainer<Scalar>::View final : public StrategyView<Scalar> {
+ public:
+  explicit View(Trainer& trainer) : t_(trainer) {}
+
+  long step() const override { return t_.global_step_; }
+  double term_weight(std::size_t k) const override { return t_.terms_.at(k).weight; }
+  const TermPoints& points(std::size_t k) const override { return t_.points_.at(k); }
+  Eigen::Index parameter_count() const override { return t_.field_.parameter_count(); }
+  Communicator& communicator() const override { return t_.communicator_; }
+  TermPoints sample(std::size_t k, Eigen::Index n) override { return t_.sample(k, n); }
+  Eigen::VectorXd squared_residuals(std::size_t k) const override {
+    return t_.squared_residuals(k, t_.points_.at(k).x, *t_.residuals_.at(k));
+  }
+  Eigen::VectorXd squared_residuals(std::size_t k, const TermPoints& points) const override {
+    return t_.squared_residuals(k, points.x, *t_.terms_.at(k).residual(points));
+  }
+  void replace_points(std::size_t k, Eigen::MatrixXd x) override {
+    t_.points_.at(k).x = std::move(x);
+    t_.set_points(k);
+  }
+  double term_loss(std::size_t k, double weight, Scalar* gradient) override {
+    return t_.term_loss(k, t_.field_.parameters().data(), weight, gradient);
+  }
+  void set_term_loss(std::size_t k, double loss) override { t_.losses_.at(k) = loss; }
+
+ private:
+  Trainer& t_;
+};
 
 template <typename Scalar>
 Trainer<Scalar>::Trainer(const Problem& problem, fields::Field<Scalar>& field,
@@ -34,13 +66,7 @@ Trainer<Scalar>::Trainer(const Problem& problem, fields::Field<Scalar>& field,
                                   "' for loss term '" + term.name + "'");
   }
   losses_.assign(terms_.size(), 0.0);
-  balance_.assign(terms_.size(), 1.0);
-  pde_ = problem_.residual_term();
-  if ((options_.adaptive.enabled || options_.causal.enabled || options_.balance.method != "fixed") &&
-      (pde_ < 0 || pde_ >= static_cast<int>(terms_.size())))
-    throw std::invalid_argument("training.adaptive, balance and causal need a PDE residual term");
-  if (options_.causal.enabled && !problem_.domain().has_time())
-    throw std::invalid_argument("training.causal needs a time axis (domain.time)");
+  strategies_ = make_training_strategies<Scalar>(options_, problem_, names_);
   if (options_.sampler != "uniform")
     for (size_t k = 0; k < terms_.size(); ++k)
       // Seeds apart from the engine's and from each other (UnitSequence mixes them further).
@@ -56,34 +82,40 @@ template <typename Scalar>
 Trainer<Scalar>::~Trainer() = default;
 
 template <typename Scalar>
+TermPoints Trainer<Scalar>::sample(size_t k, Eigen::Index n) {
+  const AttachSequence attach(rng_, sequences_.empty() ? nullptr : &sequences_[k]);
+  return terms_[k].sample(rng_, n);
+}
+
+template <typename Scalar>
+void Trainer<Scalar>::set_points(size_t k) {
+  points_scalar_[k] = points_[k].x.template cast<Scalar>();
+  tangents_scalar_[k] = points_[k].tangents.template cast<Scalar>();
+  residuals_[k] = terms_[k].residual(points_[k]);
+}
+
+template <typename Scalar>
 void Trainer<Scalar>::resample() {
   for (size_t k = 0; k < terms_.size(); ++k) {
-    {
-      const AttachSequence attach(rng_, sequences_.empty() ? nullptr : &sequences_[k]);
-      points_[k] = terms_[k].sample(rng_, options_.batch.at(terms_[k].batch_key));
-    }
-    if (static_cast<int>(k) == pde_) previous_adaptive_rows_ = adaptive_points_.rows();
-    if (static_cast<int>(k) == pde_ && adaptive_points_.rows() > 0) {
-      if (!points_[k].groups.empty() || points_[k].tangents.size() > 0)
-        throw std::logic_error("training.adaptive: loss term '" + terms_[k].name +
-                               "' reads groups of points or per-point tangents; refinement adds "
-                               "single points");
-      Eigen::MatrixXd joined(points_[k].x.rows() + adaptive_points_.rows(), points_[k].x.cols());
-      joined << points_[k].x, adaptive_points_;
-      points_[k].x = std::move(joined);
-    }
-    points_scalar_[k] = points_[k].x.template cast<Scalar>();
-    tangents_scalar_[k] = points_[k].tangents.template cast<Scalar>();
-    residuals_[k] = terms_[k].residual(points_[k]);
+    points_[k] = sample(k, options_.batch.at(terms_[k].batch_key));
+    for (const auto& s : strategies_) s->points_drawn(k, points_[k]);
+    set_points(k);
   }
 }
 
 template <typename Scalar>
+double Trainer<Scalar>::loss_scale(size_t k) const {
+  double scale = 1;
+  for (const auto& s : strategies_) scale *= s->loss_scale(k);
+  return scale;
+}
+
+template <typename Scalar>
 double Trainer<Scalar>::term_loss(size_t k, const Scalar* params, double weight, Scalar* gradient) {
-  const bool causal = options_.causal.enabled && static_cast<int>(k) == pde_ &&
-                      causal_.point_weights.size() == points_[k].x.rows();
   const TermPoints& points = points_[k];
-  const Eigen::VectorXd* point_weights = causal ? &causal_.point_weights : nullptr;
+  const Eigen::VectorXd* point_weights = nullptr;
+  for (const auto& s : strategies_)
+    if ((point_weights = s->point_weights(k, points))) break;
   const bool tangents = tangents_scalar_[k].size() > 0;
   if (!parallel()) {
     const ResidualLoss<Scalar> loss(*residuals_[k], weight, points.residual_rows(), point_weights);
@@ -130,35 +162,11 @@ template <typename Scalar>
 double Trainer<Scalar>::loss_and_gradient(const Scalar* params, Scalar* gradient) {
   Eigen::Map<autodiff::Vector<Scalar>>(gradient, field_.parameter_count()).setZero();
   for (size_t k = 0; k < terms_.size(); ++k)
-    losses_[k] = term_loss(k, params, terms_[k].weight * balance_[k], gradient);
+    losses_[k] = term_loss(k, params, terms_[k].weight * loss_scale(k), gradient);
   sum_over_ranks(gradient);
   double total = 0;
   for (double loss : losses_) total += loss;
   return total;
-}
-
-template <typename Scalar>
-void Trainer<Scalar>::balanced_gradient(Scalar* gradient) {
-  const Eigen::Index n = field_.parameter_count();
-  std::vector<autodiff::Vector<Scalar>> g(terms_.size());
-  for (size_t k = 0; k < terms_.size(); ++k) {
-    g[k] = autodiff::Vector<Scalar>::Zero(n);
-    losses_[k] = term_loss(k, field_.parameters().data(), terms_[k].weight, g[k].data());
-    if (parallel()) communicator_.allreduce_sum(g[k].data(), static_cast<std::size_t>(n));
-  }
-  if (parallel()) communicator_.allreduce_sum(losses_.data(), losses_.size());
-  const Eigen::VectorXd pde = g[pde_].template cast<double>();
-  const double alpha = options_.balance.alpha;
-  Eigen::Map<autodiff::Vector<Scalar>> sum(gradient, n);
-  sum.setZero();
-  for (size_t k = 0; k < terms_.size(); ++k) {
-    if (static_cast<int>(k) != pde_) {
-      const double target = grad_norm_target(pde, g[k].template cast<double>(), terms_[k].weight, balance_[k]);
-      balance_[k] = (1 - alpha) * balance_[k] + alpha * target;
-    }
-    sum += static_cast<Scalar>(balance_[k]) * g[k];
-    losses_[k] *= balance_[k];
-  }
 }
 
 template <typename Scalar>
@@ -186,11 +194,10 @@ void Trainer<Scalar>::begin_stage() {
 }
 
 template <typename Scalar>
-int Trainer<Scalar>::segment_length(int resample_every, bool with_causal) const {
+int Trainer<Scalar>::segment_length(int resample_every, bool reweighted) const {
   int segment = options_.stages[stage_].steps;
   if (resample_every > 0) segment = std::min(segment, resample_every);
-  if (with_causal && options_.causal.enabled) segment = std::min(segment, options_.causal.every);
-  if (options_.adaptive.enabled) segment = std::min(segment, options_.adaptive.every);
+  for (const auto& s : strategies_) segment = std::min(segment, s->segment_limit(reweighted));
   return segment;
 }
 
@@ -202,56 +209,41 @@ bool Trainer<Scalar>::ends_after_segment(int segment, int segment_start, bool ea
 
 template <typename Scalar>
 void Trainer<Scalar>::renew_points(int resample_every) {
-  if (options_.adaptive.enabled) refine();
-  if (resample_every > 0)
-    resample();
-  else if (options_.adaptive.enabled)
-    join_adaptive_points();
+  View view(*this);
+  for (const auto& s : strategies_) s->between_segments(view, resample_every > 0);
+  if (resample_every > 0) resample();
 }
 
 template <typename Scalar>
-void Trainer<Scalar>::join_adaptive_points() {
-  // The stage's own points stay; only the extra set behind them changes.
-  const Eigen::Index own = points_[pde_].x.rows() - previous_adaptive_rows_;
-  Eigen::MatrixXd joined(own + adaptive_points_.rows(), points_[pde_].x.cols());
-  joined << points_[pde_].x.topRows(own), adaptive_points_;
-  points_[pde_].x = std::move(joined);
-  points_scalar_[pde_] = points_[pde_].x.template cast<Scalar>();
-  residuals_[pde_] = terms_[pde_].residual(points_[pde_]);
-  previous_adaptive_rows_ = adaptive_points_.rows();
-}
-
-template <typename Scalar>
-void Trainer<Scalar>::refine() {
-  TermPoints candidates;
-  {
-    const AttachSequence attach(rng_, sequences_.empty() ? nullptr : &sequences_[pde_]);
-    candidates = terms_[pde_].sample(rng_, options_.adaptive.candidates);
-  }
-  const auto residual = terms_[pde_].residual(candidates);
-  const std::vector<Eigen::Index> best =
-      largest(squared_residuals(pde_, candidates.x, *residual), options_.adaptive.add);
-  append_capped(adaptive_points_, candidates.x(best, Eigen::all), options_.adaptive.max_points);
-}
-
-template <typename Scalar>
-void Trainer<Scalar>::update_causal() {
-  const Eigen::VectorXd r2 = squared_residuals(pde_, points_[pde_].x, *residuals_[pde_]);
-  const auto [t0, t1] = problem_.domain().time();
-  causal_ = solvers::causal_weights(points_[pde_].x.col(problem_.domain().time_column()), r2, t0, t1,
-                                    options_.causal.slices, options_.causal.epsilon);
+void Trainer<Scalar>::update_weights() {
+  View view(*this);
+  for (const auto& s : strategies_) s->update_weights(view);
 }
 
 template <typename Scalar>
 std::vector<std::pair<std::string, double>> Trainer<Scalar>::extra_metrics() const {
   std::vector<std::pair<std::string, double>> out;
-  if (options_.causal.enabled && !causal_.weights.empty())
-    out.emplace_back("causal_min_weight", causal_.min_weight());
-  if (options_.balance.method != "fixed")
-    for (size_t k = 0; k < terms_.size(); ++k) out.emplace_back("balance_weight_" + names_[k], balance_[k]);
-  if (options_.adaptive.enabled)
-    out.emplace_back("adaptive_points", static_cast<double>(adaptive_points_.rows()));
+  for (const auto& s : strategies_) s->metrics(out);
   return out;
+}
+
+template <typename Scalar>
+std::vector<double> Trainer<Scalar>::balance_weights() const {
+  std::vector<double> lambda(terms_.size());
+  for (size_t k = 0; k < terms_.size(); ++k) lambda[k] = loss_scale(k);
+  return lambda;
+}
+
+template <typename Scalar>
+Eigen::MatrixXd Trainer<Scalar>::adaptive_points() const {
+  const auto* adaptive = strategy<AdaptiveRefinement<Scalar>>();
+  return adaptive ? adaptive->points() : Eigen::MatrixXd();
+}
+
+template <typename Scalar>
+CausalWeights Trainer<Scalar>::causal_weights() const {
+  const auto* causal = strategy<CausalWeighting<Scalar>>();
+  return causal ? causal->weights() : CausalWeights();
 }
 
 template <typename Scalar>
@@ -266,8 +258,7 @@ Progress Trainer<Scalar>::progress(double lr) const {
   p.term_names = names_;
   p.term_losses = losses_;
   for (double l : losses_) p.loss += l;
-  if (options_.causal.enabled && !causal_.weights.empty())
-    p.extras.emplace_back("causal min w", causal_.min_weight());
+  for (const auto& s : strategies_) s->progress(p.extras);
   const double elapsed = now_seconds() - stage_started_;
   const long done = global_step_ - stage_started_step_;
   p.steps_per_second = elapsed > 0 ? done / elapsed : 0;
@@ -285,12 +276,20 @@ Progress Trainer<Scalar>::progress(double lr) const {
 
 template <typename Scalar>
 void Trainer<Scalar>::prepare_step() {
-  const bool refine_now = options_.adaptive.enabled && global_step_ > 0 &&
-                          global_step_ % options_.adaptive.every == 0;
-  if (refine_now) refine();
+  View view(*this);
+  bool redraw = false;
+  for (const auto& s : strategies_) redraw = s->before_step(view) || redraw;
   const bool drawn = std::all_of(residuals_.begin(), residuals_.end(), [](const auto& r) { return r != nullptr; });
-  if (refine_now || global_step_ % options_.resample_every == 0 || !drawn) resample();
-  if (options_.causal.enabled) update_causal();
+  if (redraw || global_step_ % options_.resample_every == 0 || !drawn) resample();
+  for (const auto& s : strategies_) s->update_weights(view);
+}
+
+template <typename Scalar>
+void Trainer<Scalar>::step_gradient(Scalar* gradient) {
+  View view(*this);
+  for (const auto& s : strategies_)
+    if (s->step_gradient(view, gradient)) return;
+  loss_and_gradient(field_.parameters().data(), gradient);
 }
 
 template <typename Scalar>
@@ -360,9 +359,7 @@ void Trainer<Scalar>::save_state(io::H5Writer& file) const {
   file.write("trainer/stage_errors", stage_errors_);
   for (size_t k = 0; k < sequences_.size(); ++k)
     file.write_attribute("trainer", "sequence_" + std::to_string(k), sequences_[k].state());
-  if (adaptive_points_.rows() > 0) file.write("trainer/adaptive_points", adaptive_points_);
-  file.write("trainer/balance_weights", balance_);
-  if (!causal_.weights.empty()) file.write("trainer/causal_weights", causal_.weights);
+  for (const auto& s : strategies_) s->save(file, "trainer");
 }
 
 template <typename Scalar>
@@ -399,9 +396,7 @@ void Trainer<Scalar>::load_state(const io::H5Reader& file) {
     }
     const std::string tangents = "trainer/tangents/" + std::to_string(k);
     if (file.has_dataset(tangents)) points_[k].tangents = file.read_matrix<double>(tangents);
-    points_scalar_[k] = points_[k].x.template cast<Scalar>();
-    tangents_scalar_[k] = points_[k].tangents.template cast<Scalar>();
-    residuals_[k] = terms_[k].residual(points_[k]);
+    set_points(k);
   }
   if (file.has_dataset("trainer/stage_losses")) {
     const Eigen::VectorXd s = file.read_vector<double>("trainer/stage_losses");
@@ -419,17 +414,7 @@ void Trainer<Scalar>::load_state(const io::H5Reader& file) {
     if (file.has_attribute("trainer", name))
       sequences_[k].set_state(file.read_attribute<std::string>("trainer", name));
   }
-  adaptive_points_.resize(0, 0);
-  if (file.has_dataset("trainer/adaptive_points"))
-    adaptive_points_ = file.read_matrix<double>("trainer/adaptive_points");
-  if (file.has_dataset("trainer/balance_weights")) {
-    const Eigen::VectorXd b = file.read_vector<double>("trainer/balance_weights");
-    if (b.size() == static_cast<Eigen::Index>(balance_.size())) balance_.assign(b.data(), b.data() + b.size());
-  }
-  if (file.has_dataset("trainer/causal_weights")) {
-    const Eigen::VectorXd c = file.read_vector<double>("trainer/causal_weights");
-    causal_.weights.assign(c.data(), c.data() + c.size());
-  }
+  for (const auto& s : strategies_) s->load(file, "trainer");
 }
 
 template <typename Scalar>
@@ -458,7 +443,7 @@ const autodiff::StreamLayout& TrainingStage<Scalar>::layout(std::size_t k) const
 }
 template <typename Scalar>
 double TrainingStage<Scalar>::weight(std::size_t k) const {
-  return trainer_.terms_.at(k).weight * trainer_.balance_.at(k);
+  return trainer_.terms_.at(k).weight * trainer_.loss_scale(k);
 }
 template <typename Scalar>
 void TrainingStage<Scalar>::set_term_loss(std::size_t k, double loss) { trainer_.losses_.at(k) = loss; }
@@ -470,21 +455,15 @@ template <typename Scalar>
 void TrainingStage<Scalar>::prepare_step() { trainer_.prepare_step(); }
 template <typename Scalar>
 void TrainingStage<Scalar>::step_gradient(Scalar* gradient) {
-  const TrainingOptions& o = trainer_.options_;
-  if (o.balance.method == "grad_norm" && trainer_.global_step_ % o.balance.every == 0)
-    trainer_.balanced_gradient(gradient);
-  else
-    trainer_.loss_and_gradient(trainer_.field_.parameters().data(), gradient);
+  trainer_.step_gradient(gradient);
 }
 template <typename Scalar>
 void TrainingStage<Scalar>::draw_points() { trainer_.resample(); }
 template <typename Scalar>
-bool TrainingStage<Scalar>::causal() const { return trainer_.options_.causal.enabled; }
+void TrainingStage<Scalar>::update_weights() { trainer_.update_weights(); }
 template <typename Scalar>
-void TrainingStage<Scalar>::update_causal_weights() { trainer_.update_causal(); }
-template <typename Scalar>
-int TrainingStage<Scalar>::segment_length(int resample_every, bool with_causal) const {
-  return trainer_.segment_length(resample_every, with_causal);
+int TrainingStage<Scalar>::segment_length(int resample_every, bool reweighted) const {
+  return trainer_.segment_length(resample_every, reweighted);
 }
 template <typename Scalar>
 bool TrainingStage<Scalar>::ends_after_segment(int segment, int segment_start, bool early) const {

@@ -14,12 +14,12 @@
 // checkpoint ends with the same parameters, bit for bit, as one never interrupted.
 // (An L-BFGS or LM stage restarts its history, and draws new points, when resumed.)
 //
-// training.sampler, adaptive, balance and causal (solvers/training/sampler.h, loss_balancing.h) hook
-// in here: each term draws through its own quasi-random sequence; every adaptive.every Adam
-// steps the PDE term's extra set is refined and the points redrawn; each Adam step first
-// computes the causal slice weights at the current parameters; every balance.every Adam steps
-// the terms' gradients are taken one by one to update λ. Their state (sequence counts, extra
-// set, λ) is part of save_state, so resumed runs still match uninterrupted ones.
+// training.sampler (solvers/training/sampler.h) hooks in here: each term draws through its own
+// quasi-random sequence, whose counts are part of save_state. What some runs do to the loss
+// or to its points (training.adaptive, balance, causal) are training strategies
+// (solvers/training/training_strategy.h), made from the options and called at fixed moments
+// of a step; the trainer knows none of them by name, and their state goes into save_state
+// too, so resumed runs still match uninterrupted ones.
 //
 // Data parallelism (solvers/training/communicator.h): with a communicator of R > 1 ranks,
 // every rank runs this same trainer on the same points (drawn from the same seeded stream,
@@ -30,8 +30,8 @@
 // from the ranks) are the same on every rank, and so are the parameters after it. What reads
 // the clock or a signal (time budgets, stop requests) is decided on rank 0 or on any rank
 // for all. Every rank repeats the drawing of points (and what a problem updates as it
-// draws, such as AutoInt's sampling network), refinement and causal weights on the whole
-// set: same inputs, same thread count, same bits. A checkpoint of an R-rank run records R,
+// draws, such as AutoInt's sampling network) and the strategies' hooks on the whole set:
+// same inputs, same thread count, same bits. A checkpoint of an R-rank run records R,
 // and load_state refuses another R: the order of the sums, and so the bits of the run,
 // depend on it. R = 1 (and a build without MPI) runs as before.
 #pragma once
@@ -48,6 +48,7 @@
 #include "solvers/training/optimizer.h"
 #include "solvers/problem.h"
 #include "solvers/training/training_options.h"
+#include "solvers/training/training_strategy.h"
 
 namespace nfield::solvers {
 
@@ -105,20 +106,34 @@ class Trainer {
   // Wall seconds of each finished stage (NaN for stages finished before a resume).
   const std::vector<double>& stage_seconds() const { return stage_seconds_; }
 
-  // Sampling and balancing state, for metrics.json and tests.
+  // The strategies' figures, for metrics.json, in their order.
   std::vector<std::pair<std::string, double>> extra_metrics() const;
   const Eigen::MatrixXd& points(size_t term) const { return points_[term].x; }
-  const Eigen::MatrixXd& adaptive_points() const { return adaptive_points_; }
-  const std::vector<double>& balance_weights() const { return balance_; }
-  const CausalWeights& causal_weights() const { return causal_; }
+  // The strategy of type T (such as CausalWeighting<Scalar>), or null when the run has none.
+  template <class T>
+  const T* strategy() const {
+    for (const auto& s : strategies_)
+      if (const T* t = dynamic_cast<const T*>(s.get())) return t;
+    return nullptr;
+  }
+  // λ of each term: the product of the strategies' loss scales (1 without training.balance).
+  std::vector<double> balance_weights() const;
+  // Shorthands of strategy<T>() for tests: empty when the strategy is off.
+  Eigen::MatrixXd adaptive_points() const;
+  CausalWeights causal_weights() const;
 
   void save_state(io::H5Writer& file) const;
   void load_state(const io::H5Reader& file);
 
  private:
   friend class TrainingStage<Scalar>;
+  class View;  // the StrategyView of this trainer
 
   void resample();
+  // n new points of term k, through its sequence.
+  TermPoints sample(size_t k, Eigen::Index n);
+  void set_points(size_t k);  // the scalar copies and the residual of points_[k]
+  double loss_scale(size_t k) const;
   double loss_and_gradient(const Scalar* params, Scalar* gradient);
   // This rank's part of term k's loss (the whole of it with one rank).
   double term_loss(size_t k, const Scalar* params, double weight, Scalar* gradient);
@@ -126,20 +141,17 @@ class Trainer {
   void sum_over_ranks(Scalar* gradient);
   bool parallel() const { return communicator_.size() > 1; }
   Eigen::VectorXd squared_residuals(size_t k, const Eigen::MatrixXd& x, const Residual& r) const;
-  void refine();
   // Tells the field and the terms that stage_ starts and rebuilds the residuals of the terms
   // that listen.
   void begin_stage();
   // See TrainingStage (solvers/training/optimizer.h).
   void prepare_step();
-  int segment_length(int resample_every, bool with_causal) const;
+  void step_gradient(Scalar* gradient);
+  int segment_length(int resample_every, bool reweighted) const;
   bool ends_after_segment(int segment, int segment_start, bool early) const;
   void renew_points(int resample_every);
   void finish_step(double learning_rate, double milliseconds);
-  // Puts the RAR set behind the PDE term's own points of the stage.
-  void join_adaptive_points();
-  void update_causal();
-  void balanced_gradient(Scalar* gradient);
+  void update_weights();
   Progress progress(double lr) const;
 
   const Problem& problem_;
@@ -163,12 +175,8 @@ class Trainer {
   long global_step_ = 0;
   double stage_started_ = 0;     // wall clock and global step at the start of the stage
   long stage_started_step_ = 0;  // (or of the resumed part of it)
-  int pde_ = -1;                          // the problem's residual term
   std::vector<UnitSequence> sequences_;   // one per term (none for uniform sampling)
-  Eigen::MatrixXd adaptive_points_;       // RAR extra set, appended to the PDE batch
-  Eigen::Index previous_adaptive_rows_ = 0;  // rows of it behind the current PDE points
-  std::vector<double> balance_;           // λ per term (1 unless grad_norm)
-  CausalWeights causal_;
+  TrainingStrategies<Scalar> strategies_;
 };
 
 }  // namespace nfield::solvers
