@@ -1,7 +1,10 @@
 // SPDX-License-Identifier: MIT
 //
 // Accuracy aids that act on the loss and on where its points lie, each optional and set in
-// the `training:` section (defaults shown; parsed here so that training_options stays small):
+// the `training:` section (defaults shown; parsed here so that training_options stays small).
+// This file holds their options and the math they share; the training strategies that apply
+// them are adaptive_refinement.h, gradient_balancing.h and causal_weighting.h
+// (training_strategy.h):
 //
 //   sampler: uniform          # uniform | sobol | halton (solvers/training/sampler.h)
 //

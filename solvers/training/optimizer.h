@@ -81,8 +81,8 @@ class TrainingStage {
   // are taken, or the segment ended `early` (no decrease found) and either the stage has no
   // further segments or the segment made no step at all.
   bool ends_after_segment(int segment, int segment_start, bool early) const;
-  // Between segments: RAR points, then a new point set (resample_every > 0) or the RAR set
-  // joined to the stage's own points.
+  // Between segments: the strategies' changes of the points (RAR refines its set), then a
+  // new point set (resample_every > 0) or the stage's own points with the new RAR set.
   void renew_points(int resample_every);
 
   // The ranks the trainer splits each step over (solvers/training/trainer.h); one for a
