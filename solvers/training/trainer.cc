@@ -281,7 +281,7 @@ void Trainer<Scalar>::prepare_step() {
   for (const auto& s : strategies_) redraw = s->before_step(view) || redraw;
   const bool drawn = std::all_of(residuals_.begin(), residuals_.end(), [](const auto& r) { return r != nullptr; });
   if (redraw || global_step_ % options_.resample_every == 0 || !drawn) resample();
-  for (const auto& s : strategies_) s->update_weights(view);
+  update_weights();
 }
 
 template <typename Scalar>
