@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: MIT
 #include "solvers/conditions/hard_constraints.h"
 
+#include <ceres/jet.h>
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -199,7 +201,8 @@ void fill_streams(const StreamLayout& layout, const std::vector<Eigen::MatrixXd>
 
 }  // namespace
 
-AnsatzStreams Ansatz::streams(const StreamLayout& layout, const Eigen::MatrixXd& x) const {
+AnsatzStreams Ansatz::streams(const StreamLayout& layout, const Eigen::MatrixXd& x,
+                              bool with_jacobian) const {
   if (layout.taylor_dirs() > 0)
     throw std::invalid_argument(
         "hard conditions (enforce: hard) do not support Taylor streams (derivatives of order > "
@@ -219,58 +222,82 @@ AnsatzStreams Ansatz::streams(const StreamLayout& layout, const Eigen::MatrixXd&
   const std::vector<Jet> base = base_jets(x, second);
   for (int c = 0; c < channels_; ++c) fill_streams(layout, kernels, base[c], c, s.base);
   fill_streams(layout, kernels, factor_jet(x, second), 0, s.factor);
+  if (with_jacobian) s.jacobian = jacobian(layout, s, 0, n);
   return s;
 }
 
 void Ansatz::apply(const StreamLayout& layout, const AnsatzStreams& s, Eigen::Index first,
                    const Streams<double>& n, Streams<double>& u) const {
-  const Eigen::Index p = n.points;
-  u.resize(p, n.count, n.width());
-  auto A = [&](int k) { return s.base.stream(k).middleRows(first, p); };
-  auto D = [&](int k) { return s.factor.stream(k).col(0).segment(first, p).array(); };
-  const auto n0 = n.stream(0).array();
-  const auto d0 = D(0);
-  u.stream(0) = A(0).array() + n0.colwise() * d0;
-  for (int i = 0; i < layout.tangents(); ++i) {
-    const int k = layout.tangent(i);
-    u.stream(k) = A(k).array() + n0.colwise() * D(k) + n.stream(k).array().colwise() * d0;
+  const Eigen::Index points = n.points, rows = s.factor.points;
+  const int count = layout.count();
+  u.resize(points, n.count, n.width());
+  // One point's streams, gathered: stream k of point p is row k · points + p.
+  std::vector<double> a(count), d(count), np(count), up(count);
+  for (Eigen::Index p = 0; p < points; ++p) {
+    for (int k = 0; k < count; ++k) d[k] = s.factor.data(k * rows + first + p, 0);
+    for (Eigen::Index c = 0; c < n.width(); ++c) {
+      for (int k = 0; k < count; ++k) {
+        a[k] = s.base.data(k * rows + first + p, c);
+        np[k] = n.data(k * points + p, c);
+      }
+      ansatz_product_rule(layout, a.data(), d.data(), np.data(), up.data());
+      for (int k = 0; k < count; ++k) u.data(k * points + p, c) = up[k];
+    }
   }
-  for (int q = 0; q < layout.operators(); ++q) {
-    const int k = layout.op(q);
-    auto out = u.stream(k);
-    out = A(k).array() + n0.colwise() * D(k) + n.stream(k).array().colwise() * d0;
-    const Eigen::MatrixXd& c = layout.spec().operators[q];
-    for (int i = 0; i < layout.tangents(); ++i)
-      for (int j = 0; j < layout.tangents(); ++j)
-        if (c(i, j) != 0)
-          out.array() += (2.0 * c(i, j)) *
-                         (n.stream(layout.tangent(j)).array().colwise() * D(layout.tangent(i)));
+}
+
+AnsatzJacobian Ansatz::jacobian(const StreamLayout& layout, const AnsatzStreams& s,
+                                Eigen::Index first, Eigen::Index count) {
+  constexpr int kChunk = 8;  // duals per pass: S ≤ 8 in one (see the header)
+  using Dual = ceres::Jet<double, kChunk>;
+  const int streams = layout.count();
+  const Eigen::Index rows = s.factor.points;
+  // Dense J first, column i · S + j = ∂u_i/∂N_j over the points; pruned below.
+  Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(count, Eigen::Index{streams} * streams);
+  // A enters the rule as a constant: zeros give the same derivatives.
+  const std::vector<double> a(streams, 0.0);
+  std::vector<double> d(streams);
+  std::vector<Dual> n(streams), u(streams);
+  for (Eigen::Index p = 0; p < count; ++p) {
+    for (int k = 0; k < streams; ++k) d[k] = s.factor.data(k * rows + first + p, 0);
+    for (int start = 0; start < streams; start += kChunk) {
+      // J does not depend on N (linear): the value part is 0, the duals pick the chunk.
+      for (int j = 0; j < streams; ++j)
+        n[j] = j >= start && j < start + kChunk ? Dual(0.0, j - start) : Dual(0.0);
+      ansatz_product_rule(layout, a.data(), d.data(), n.data(), u.data());
+      for (int i = 0; i < streams; ++i)
+        for (int j = start; j < std::min(streams, start + kChunk); ++j)
+          dense(p, Eigen::Index{i} * streams + j) = u[i].v[j - start];
+    }
   }
+  AnsatzJacobian out;
+  std::vector<Eigen::Index> keep;
+  for (int i = 0; i < streams; ++i)
+    for (int j = 0; j < streams; ++j) {
+      const Eigen::Index col = Eigen::Index{i} * streams + j;
+      if ((dense.col(col).array() != 0).any()) {
+        out.entries.emplace_back(i, j);
+        keep.push_back(col);
+      }
+    }
+  out.values.resize(count, static_cast<Eigen::Index>(keep.size()));
+  for (size_t e = 0; e < keep.size(); ++e) out.values.col(static_cast<Eigen::Index>(e)) = dense.col(keep[e]);
+  return out;
 }
 
 void Ansatz::adjoint(const StreamLayout& layout, const AnsatzStreams& s, Eigen::Index first,
                      const Streams<double>& u_bar, Streams<double>& n_bar) const {
   const Eigen::Index p = u_bar.points;
-  auto D = [&](int k) { return s.factor.stream(k).col(0).segment(first, p).array(); };
-  const auto d0 = D(0);
-  auto n0 = n_bar.stream(0);
-  n0.array() += u_bar.stream(0).array().colwise() * d0;
-  for (int i = 0; i < layout.tangents(); ++i) {
-    const int k = layout.tangent(i);
-    n0.array() += u_bar.stream(k).array().colwise() * D(k);
-    n_bar.stream(k).array() += u_bar.stream(k).array().colwise() * d0;
-  }
-  for (int q = 0; q < layout.operators(); ++q) {
-    const int k = layout.op(q);
-    const auto ub = u_bar.stream(k).array();
-    n0.array() += ub.colwise() * D(k);
-    n_bar.stream(k).array() += ub.colwise() * d0;
-    const Eigen::MatrixXd& c = layout.spec().operators[q];
-    for (int i = 0; i < layout.tangents(); ++i)
-      for (int j = 0; j < layout.tangents(); ++j)
-        if (c(i, j) != 0)
-          n_bar.stream(layout.tangent(j)).array() +=
-              (2.0 * c(i, j)) * (ub.colwise() * D(layout.tangent(i)));
+  std::optional<AnsatzJacobian> block;
+  if (!s.jacobian) block = jacobian(layout, s, first, p);
+  const AnsatzJacobian& j = s.jacobian ? *s.jacobian : *block;
+  const Eigen::Index offset = s.jacobian ? first : 0;
+  // N̄_j += J_ij ū_i, per point, for every channel at once.
+  for (size_t e = 0; e < j.entries.size(); ++e) {
+    const auto [to, from] = j.entries[e];
+    n_bar.stream(from).array() +=
+        u_bar.stream(to).array().colwise() *
+        j.values.col(static_cast<Eigen::Index>(e)).segment(offset, p).array();
   }
 }
 
@@ -287,7 +314,8 @@ Eigen::MatrixXd Ansatz::values(const Eigen::MatrixXd& x, const Eigen::MatrixXd& 
 
 AnsatzResidual::AnsatzResidual(std::shared_ptr<const Ansatz> ansatz, std::unique_ptr<Residual> inner,
                                const StreamLayout& layout, const Eigen::MatrixXd& points)
-    : ansatz_(std::move(ansatz)), inner_(std::move(inner)), streams_(ansatz_->streams(layout, points)) {}
+    : ansatz_(std::move(ansatz)), inner_(std::move(inner)),
+      streams_(ansatz_->streams(layout, points, /*with_jacobian=*/true)) {}
 
 void AnsatzResidual::evaluate(Eigen::Index first, const StreamLayout& layout,
                               const Streams<double>& out, Eigen::MatrixXd& r) const {

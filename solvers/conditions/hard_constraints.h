@@ -37,11 +37,23 @@
 //     u⁽ⁱ⁾  = A⁽ⁱ⁾ + D⁽ⁱ⁾ N⁰ + D⁰ N⁽ⁱ⁾
 //     u^[C] = A^[C] + D^[C] N⁰ + Σᵢⱼ Cᵢⱼ (D⁽ⁱ⁾N⁽ʲ⁾ + D⁽ʲ⁾N⁽ⁱ⁾) + D⁰ N^[C]
 //
-// and its adjoint maps ū back onto N̄ (linear in N, so exact):
+// This rule is written once, templated on the scalar (ansatz_product_rule below, per point
+// and channel). `apply` runs it in double. Its adjoint is not written by hand: the map is
+// linear in N, so u = A + J N with J = ∂u/∂N an S × S matrix per point (S = 1 + T + Q
+// streams), and ū ↦ Jᵀ ū is exact. J depends only on the D streams and the operators C — not
+// on A, not on N, not on the channel — so it is read off the rule once per point set
+// (AnsatzResidual builds it with the A and D streams) by forward-mode duals: N seeded as
+// ceres::Jet<double, 8> unit duals, a chunk of 8 streams per pass, so ⌈S/8⌉ passes per point
+// (one up to 3D + time with three operators; S is known only at run time, hence chunks
+// rather than Jet<double, S>). Only the entries nonzero somewhere in the set are kept,
+// points × entries; for the rule above they are at most those of its transpose
 //
 //     N̄⁰    += D⁰ ū⁰ + Σᵢ D⁽ⁱ⁾ ū⁽ⁱ⁾ + Σ_C D^[C] ū^[C]
 //     N̄⁽ʲ⁾  += D⁰ ū⁽ʲ⁾ + Σ_C ū^[C] Σᵢ (Cᵢⱼ + Cⱼᵢ) D⁽ⁱ⁾
 //     N̄^[C] += D⁰ ū^[C]
+//
+// so a step's adjoint costs one column product per entry, as that formula written out would
+// (tests/solvers/hard_constraints_test.cc keeps it as the reference).
 //
 // The streams of A and D come from their gradient ∇ and Hessian H in input coordinates:
 // a⁽ⁱ⁾ = ∇a·vᵢ, a^[C] = Σ_ab (V C Vᵀ)_ab H_ab. D is a polynomial: exact. A is built from the
@@ -58,6 +70,7 @@
 
 #include <memory>
 #include <optional>
+#include <utility>
 #include <string>
 #include <vector>
 
@@ -78,12 +91,45 @@ struct Jet {
   Jet operator+(const Jet& other) const;
 };
 
+// J = ∂u/∂N of the ansatz at each point of a set (the same for every channel): the
+// entries (u stream, N stream) nonzero at some point, and their values, points × entries.
+struct AnsatzJacobian {
+  std::vector<std::pair<int, int>> entries;
+  Eigen::MatrixXd values;
+};
+
 // The streams of A (points × channels per stream) and D (points × 1 per stream) for one
-// layout and point set.
+// layout and point set, and J when asked for (the adjoint builds it per block otherwise).
 struct AnsatzStreams {
   Streams<double> base;
   Streams<double> factor;
+  std::optional<AnsatzJacobian> jacobian;
 };
+
+// The product rule at one point and channel: u = A + D N on the streams of `layout` (value,
+// tangents, operators; no Taylor streams). a, d: the point's A streams (of the channel) and
+// D streams, n: N's, u: the result, each layout.count() long. T is double in `apply` and
+// ceres::Jet for J; A and D enter as constants.
+template <typename T>
+void ansatz_product_rule(const StreamLayout& layout, const double* a, const double* d,
+                         const T* n, T* u) {
+  u[0] = a[0] + d[0] * n[0];
+  for (int i = 0; i < layout.tangents(); ++i) {
+    const int k = layout.tangent(i);
+    u[k] = a[k] + d[k] * n[0] + d[0] * n[k];
+  }
+  for (int q = 0; q < layout.operators(); ++q) {
+    const int k = layout.op(q);
+    T sum = a[k] + d[k] * n[0] + d[0] * n[k];
+    // Σᵢⱼ Cᵢⱼ (D⁽ⁱ⁾N⁽ʲ⁾ + D⁽ʲ⁾N⁽ⁱ⁾) over the pairs i ≤ j, whose coefficient is Cᵢⱼ + Cⱼᵢ
+    // off the diagonal (i = j counts D⁽ⁱ⁾N⁽ⁱ⁾ twice, as it should).
+    for (const autodiff::OperatorTerm& t : layout.terms(q)) {
+      const int i = layout.tangent(t.i), j = layout.tangent(t.j);
+      sum += t.coefficient * (d[i] * n[j] + d[j] * n[i]);
+    }
+    u[k] = sum;
+  }
+}
 
 class Ansatz {
  public:
@@ -107,12 +153,17 @@ class Ansatz {
   std::vector<Jet> base_jets(const Eigen::MatrixXd& x, bool second) const;
   Jet factor_jet(const Eigen::MatrixXd& x, bool second) const;
 
-  // A and D streams at x for `layout` (throws std::invalid_argument on Taylor streams).
-  AnsatzStreams streams(const StreamLayout& layout, const Eigen::MatrixXd& x) const;
+  // A and D streams at x for `layout` (throws std::invalid_argument on Taylor streams), and
+  // J with `with_jacobian` (for repeated adjoints on the same points).
+  AnsatzStreams streams(const StreamLayout& layout, const Eigen::MatrixXd& x,
+                        bool with_jacobian = false) const;
+  // J at points [first, first + count) of s, from ansatz_product_rule in ceres::Jet.
+  static AnsatzJacobian jacobian(const StreamLayout& layout, const AnsatzStreams& s,
+                                 Eigen::Index first, Eigen::Index count);
   // u streams from network streams n for points [first, first + n.points) of `s`.
   void apply(const StreamLayout& layout, const AnsatzStreams& s, Eigen::Index first,
              const Streams<double>& n, Streams<double>& u) const;
-  // n_bar += ∂(Σ ū ⊙ u)/∂n.
+  // n_bar += ∂(Σ ū ⊙ u)/∂n = Jᵀ ū (s.jacobian when there, else J built for this block).
   void adjoint(const StreamLayout& layout, const AnsatzStreams& s, Eigen::Index first,
                const Streams<double>& u_bar, Streams<double>& n_bar) const;
   // u values at x from network values (n × channels).
