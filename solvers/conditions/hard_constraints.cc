@@ -7,6 +7,7 @@
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
+#include <type_traits>
 
 #include "io/registry.h"
 #include "solvers/conditions/condition_values.h"
@@ -226,24 +227,53 @@ AnsatzStreams Ansatz::streams(const StreamLayout& layout, const Eigen::MatrixXd&
   return s;
 }
 
-void Ansatz::apply(const StreamLayout& layout, const AnsatzStreams& s, Eigen::Index first,
-                   const Streams<double>& n, Streams<double>& u) const {
+namespace {
+
+// ansatz_product_rule on points [begin, end) of n, `Lanes` at a time: the rule on
+// Eigen::Array<double, Lanes, 1> packs (Lanes = 1: plain doubles). Stream k of point p is
+// row k · points + p, so a pack of consecutive points is a contiguous segment.
+template <int Lanes>
+void apply_packs(const StreamLayout& layout, const AnsatzStreams& s, Eigen::Index first,
+                 const Streams<double>& n, Streams<double>& u, Eigen::Index begin,
+                 Eigen::Index end) {
+  using Pack = std::conditional_t<Lanes == 1, double, Eigen::Array<double, Lanes, 1>>;
+  auto load = [](const auto& column, Eigen::Index row) -> Pack {
+    if constexpr (Lanes == 1) return column(row);
+    else return column.template segment<Lanes>(row).array();
+  };
+  if (end - begin < Lanes) return;
   const Eigen::Index points = n.points, rows = s.factor.points;
   const int count = layout.count();
-  u.resize(points, n.count, n.width());
-  // One point's streams, gathered: stream k of point p is row k · points + p.
-  std::vector<double> a(count), d(count), np(count), up(count);
-  for (Eigen::Index p = 0; p < points; ++p) {
-    for (int k = 0; k < count; ++k) d[k] = s.factor.data(k * rows + first + p, 0);
+  // Scratch kept per thread: training calls this once a block of 128 points, where four
+  // allocations would cost as much as the arithmetic.
+  static thread_local std::vector<Pack> scratch;
+  scratch.resize(4 * static_cast<size_t>(count));
+  Pack *a = scratch.data(), *d = a + count, *np = d + count, *up = np + count;
+  for (Eigen::Index p = begin; p + Lanes <= end; p += Lanes) {
+    for (int k = 0; k < count; ++k) d[k] = load(s.factor.data.col(0), k * rows + first + p);
     for (Eigen::Index c = 0; c < n.width(); ++c) {
       for (int k = 0; k < count; ++k) {
-        a[k] = s.base.data(k * rows + first + p, c);
-        np[k] = n.data(k * points + p, c);
+        a[k] = load(s.base.data.col(c), k * rows + first + p);
+        np[k] = load(n.data.col(c), k * points + p);
       }
-      ansatz_product_rule(layout, a.data(), d.data(), np.data(), up.data());
-      for (int k = 0; k < count; ++k) u.data(k * points + p, c) = up[k];
+      ansatz_product_rule(layout, a, d, np, up);
+      for (int k = 0; k < count; ++k) {
+        if constexpr (Lanes == 1) u.data(k * points + p, c) = up[k];
+        else u.data.col(c).template segment<Lanes>(k * points + p) = up[k].matrix();
+      }
     }
   }
+}
+
+}  // namespace
+
+void Ansatz::apply(const StreamLayout& layout, const AnsatzStreams& s, Eigen::Index first,
+                   const Streams<double>& n, Streams<double>& u) const {
+  constexpr int kLanes = 16;  // two AVX-512 registers, four AVX2 ones; divides the block of 128
+  u.resize(n.points, n.count, n.width());
+  const Eigen::Index packed = n.points / kLanes * kLanes;
+  apply_packs<kLanes>(layout, s, first, n, u, 0, packed);
+  apply_packs<1>(layout, s, first, n, u, packed, n.points);
 }
 
 AnsatzJacobian Ansatz::jacobian(const StreamLayout& layout, const AnsatzStreams& s,
@@ -281,7 +311,8 @@ AnsatzJacobian Ansatz::jacobian(const StreamLayout& layout, const AnsatzStreams&
       }
     }
   out.values.resize(count, static_cast<Eigen::Index>(keep.size()));
-  for (size_t e = 0; e < keep.size(); ++e) out.values.col(static_cast<Eigen::Index>(e)) = dense.col(keep[e]);
+  for (size_t e = 0; e < keep.size(); ++e)
+    out.values.col(static_cast<Eigen::Index>(e)) = dense.col(keep[e]);
   return out;
 }
 
