@@ -202,8 +202,7 @@ void fill_streams(const StreamLayout& layout, const std::vector<Eigen::MatrixXd>
 
 }  // namespace
 
-AnsatzStreams Ansatz::streams(const StreamLayout& layout, const Eigen::MatrixXd& x,
-                              bool with_jacobian) const {
+AnsatzStreams Ansatz::streams(const StreamLayout& layout, const Eigen::MatrixXd& x) const {
   if (layout.taylor_dirs() > 0)
     throw std::invalid_argument(
         "hard conditions (enforce: hard) do not support Taylor streams (derivatives of order > "
@@ -223,7 +222,7 @@ AnsatzStreams Ansatz::streams(const StreamLayout& layout, const Eigen::MatrixXd&
   const std::vector<Jet> base = base_jets(x, second);
   for (int c = 0; c < channels_; ++c) fill_streams(layout, kernels, base[c], c, s.base);
   fill_streams(layout, kernels, factor_jet(x, second), 0, s.factor);
-  if (with_jacobian) s.jacobian = jacobian(layout, s, 0, n);
+  s.terms = bilinear_terms(layout);
   return s;
 }
 
@@ -276,59 +275,41 @@ void Ansatz::apply(const StreamLayout& layout, const AnsatzStreams& s, Eigen::In
   apply_packs<1>(layout, s, first, n, u, packed, n.points);
 }
 
-AnsatzJacobian Ansatz::jacobian(const StreamLayout& layout, const AnsatzStreams& s,
-                                Eigen::Index first, Eigen::Index count) {
+std::vector<AnsatzTerm> Ansatz::bilinear_terms(const StreamLayout& layout) {
   constexpr int kChunk = 8;  // duals per pass: S ≤ 8 in one (see the header)
   using Dual = ceres::Jet<double, kChunk>;
-  const int streams = layout.count();
-  const Eigen::Index rows = s.factor.points;
-  // Dense J first, column i · S + j = ∂u_i/∂N_j over the points; pruned below.
-  Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(count, Eigen::Index{streams} * streams);
+  const int count = layout.count();
   // A enters the rule as a constant: zeros give the same derivatives.
-  const std::vector<double> a(streams, 0.0);
-  std::vector<double> d(streams);
-  std::vector<Dual> n(streams), u(streams);
-  for (Eigen::Index p = 0; p < count; ++p) {
-    for (int k = 0; k < streams; ++k) d[k] = s.factor.data(k * rows + first + p, 0);
-    for (int start = 0; start < streams; start += kChunk) {
-      // J does not depend on N (linear): the value part is 0, the duals pick the chunk.
-      for (int j = 0; j < streams; ++j)
+  const std::vector<double> a(count, 0.0);
+  std::vector<double> d(count, 0.0);
+  std::vector<Dual> n(count), u(count);
+  std::vector<AnsatzTerm> terms;
+  for (int k = 0; k < count; ++k) {
+    d.assign(count, 0.0);
+    d[k] = 1;  // D = e_k: u − A = Σ_j M_ijk N_j
+    for (int start = 0; start < count; start += kChunk) {
+      // u − A is linear in N: the value part (0) does not matter, the duals pick the chunk.
+      for (int j = 0; j < count; ++j)
         n[j] = j >= start && j < start + kChunk ? Dual(0.0, j - start) : Dual(0.0);
       ansatz_product_rule(layout, a.data(), d.data(), n.data(), u.data());
-      for (int i = 0; i < streams; ++i)
-        for (int j = start; j < std::min(streams, start + kChunk); ++j)
-          dense(p, Eigen::Index{i} * streams + j) = u[i].v[j - start];
+      for (int i = 0; i < count; ++i)
+        for (int j = start; j < std::min(count, start + kChunk); ++j)
+          if (u[i].v[j - start] != 0) terms.push_back({i, j, k, u[i].v[j - start]});
     }
   }
-  AnsatzJacobian out;
-  std::vector<Eigen::Index> keep;
-  for (int i = 0; i < streams; ++i)
-    for (int j = 0; j < streams; ++j) {
-      const Eigen::Index col = Eigen::Index{i} * streams + j;
-      if ((dense.col(col).array() != 0).any()) {
-        out.entries.emplace_back(i, j);
-        keep.push_back(col);
-      }
-    }
-  out.values.resize(count, static_cast<Eigen::Index>(keep.size()));
-  for (size_t e = 0; e < keep.size(); ++e)
-    out.values.col(static_cast<Eigen::Index>(e)) = dense.col(keep[e]);
-  return out;
+  return terms;
 }
 
 void Ansatz::adjoint(const StreamLayout& layout, const AnsatzStreams& s, Eigen::Index first,
                      const Streams<double>& u_bar, Streams<double>& n_bar) const {
   const Eigen::Index p = u_bar.points;
-  std::optional<AnsatzJacobian> block;
-  if (!s.jacobian) block = jacobian(layout, s, first, p);
-  const AnsatzJacobian& j = s.jacobian ? *s.jacobian : *block;
-  const Eigen::Index offset = s.jacobian ? first : 0;
-  // N̄_j += J_ij ū_i, per point, for every channel at once.
-  for (size_t e = 0; e < j.entries.size(); ++e) {
-    const auto [to, from] = j.entries[e];
-    n_bar.stream(from).array() +=
-        u_bar.stream(to).array().colwise() *
-        j.values.col(static_cast<Eigen::Index>(e)).segment(offset, p).array();
+  std::vector<AnsatzTerm> computed;  // only for streams built without Ansatz::streams
+  if (s.terms.empty()) computed = bilinear_terms(layout);
+  const std::vector<AnsatzTerm>& terms = s.terms.empty() ? computed : s.terms;
+  // N̄_n += M D_d ⊙ ū_u, for every channel at once.
+  for (const AnsatzTerm& t : terms) {
+    const auto d = s.factor.stream(t.d).col(0).segment(first, p).array();
+    n_bar.stream(t.n).array() += t.coefficient * (u_bar.stream(t.u).array().colwise() * d);
   }
 }
 
@@ -345,8 +326,7 @@ Eigen::MatrixXd Ansatz::values(const Eigen::MatrixXd& x, const Eigen::MatrixXd& 
 
 AnsatzResidual::AnsatzResidual(std::shared_ptr<const Ansatz> ansatz, std::unique_ptr<Residual> inner,
                                const StreamLayout& layout, const Eigen::MatrixXd& points)
-    : ansatz_(std::move(ansatz)), inner_(std::move(inner)),
-      streams_(ansatz_->streams(layout, points, /*with_jacobian=*/true)) {}
+    : ansatz_(std::move(ansatz)), inner_(std::move(inner)), streams_(ansatz_->streams(layout, points)) {}
 
 void AnsatzResidual::evaluate(Eigen::Index first, const StreamLayout& layout,
                               const Streams<double>& out, Eigen::MatrixXd& r) const {

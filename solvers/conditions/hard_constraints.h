@@ -44,23 +44,32 @@
 // and 5 µs for the whole-stream Eigen expressions it replaced; a training step there takes
 // 15 ms.
 //
-// The adjoint is not written by hand. The map is linear in N, so u = A + J N with J = ∂u/∂N
-// an S × S matrix per point (S = 1 + T + Q), and ū ↦ Jᵀ ū is exact. J depends only on the D
-// streams and the operators C — not on A, not on N, not on the channel — so it is read off
-// the rule once per point set (AnsatzResidual builds it with the A and D streams) by
-// forward-mode duals: N seeded as ceres::Jet<double, 8> unit duals, a chunk of 8 streams per
-// pass, ⌈S/8⌉ passes per point (one up to 3D + time with three operators; S is known only at
-// run time, hence chunks rather than Jet<double, S>). That is 0.4 ms for the 3000 points
-// above, beside the 7 ms their A and D streams take. Only the entries nonzero somewhere in
-// the set are kept (points × entries); for the rule above they are at most those of its
-// transpose written out,
+// The adjoint is not written by hand. Every term of u − A above is one D stream times one N
+// stream: the rule is bilinear in (D, N),
+//
+//     u_i = A_i + Σ_jk M_ijk D_k N_j,    M_ijk = ∂²u_i/∂N_j∂D_k,
+//
+// with coefficients that depend on the layout only (its operators C), not on the point, the
+// channel, A or N. They are read off the rule by forward-mode duals (Ansatz::bilinear_terms):
+// with D = e_k, the k-th unit vector in double, and N seeded as ceres::Jet<double, 8> unit
+// duals, a chunk of 8 streams per pass, the dual part j of u_i is M_ijk exactly. That is
+// S·⌈S/8⌉ passes per layout, S = 1 + T + Q (one chunk up to 3D + time with three operators;
+// S is known only at run time, hence chunks rather than Jet<double, S>): about 1 µs for
+// S = 5. Ansatz::streams does it once, beside the A and D streams (AnsatzStreams::terms); on
+// every call of the adjoint, a block of 128 points, it would double the adjoint's cost.
+// Nothing is stored per point. The adjoint is then
+//
+//     N̄_j += Σ_ik M_ijk D_k ū_i,    one column product per nonzero M_ijk,
+//
+// the same products as the transpose written out by hand,
 //
 //     N̄⁰    += D⁰ ū⁰ + Σᵢ D⁽ⁱ⁾ ū⁽ⁱ⁾ + Σ_C D^[C] ū^[C]
 //     N̄⁽ʲ⁾  += D⁰ ū⁽ʲ⁾ + Σ_C ū^[C] Σᵢ (Cᵢⱼ + Cⱼᵢ) D⁽ⁱ⁾
 //     N̄^[C] += D⁰ ū^[C]
 //
-// so a step's adjoint is one column product per entry, as that formula's was (5 µs both;
-// tests/solvers/ansatz_adjoint_test.cc keeps it as the reference).
+// which tests/solvers/ansatz_adjoint_test.cc keeps as the reference (5 µs either way for the
+// 3000 points above). A change to the rule that breaks bilinearity (a product of two D or two
+// N streams) makes that test fail.
 //
 // The streams of A and D come from their gradient ∇ and Hessian H in input coordinates:
 // a⁽ⁱ⁾ = ∇a·vᵢ, a^[C] = Σ_ab (V C Vᵀ)_ab H_ab. D is a polynomial: exact. A is built from the
@@ -77,7 +86,6 @@
 
 #include <memory>
 #include <optional>
-#include <utility>
 #include <string>
 #include <vector>
 
@@ -98,26 +106,28 @@ struct Jet {
   Jet operator+(const Jet& other) const;
 };
 
-// J = ∂u/∂N of the ansatz at each point of a set (the same for every channel): the
-// entries (u stream, N stream) nonzero at some point, and their values, points × entries.
-struct AnsatzJacobian {
-  std::vector<std::pair<int, int>> entries;
-  Eigen::MatrixXd values;
+// One nonzero coefficient of the rule: u stream `u` has the term coefficient · D_d · N_n.
+struct AnsatzTerm {
+  int u = 0;
+  int n = 0;
+  int d = 0;
+  double coefficient = 0;
 };
 
 // The streams of A (points × channels per stream) and D (points × 1 per stream) for one
-// layout and point set, and J when asked for (the adjoint builds it per block otherwise).
+// layout and point set, and the rule's coefficients for that layout (Ansatz::bilinear_terms).
 struct AnsatzStreams {
   Streams<double> base;
   Streams<double> factor;
-  std::optional<AnsatzJacobian> jacobian;
+  std::vector<AnsatzTerm> terms;
 };
 
 // The product rule at one point and channel: u = A + D N on the streams of `layout` (value,
 // tangents, operators; no Taylor streams). a, d: the point's A streams (of the channel) and
 // D streams, n: N's, u: the result, each layout.count() long. T is the scalar of N and u:
-// double, a pack of points (an Eigen fixed-size array, in `apply`), or ceres::Jet (for J);
-// C that of A and D, which enter as constants: double, or the same pack.
+// double, a pack of points (an Eigen fixed-size array, in `apply`), or ceres::Jet (for the
+// coefficients M); C that of A and D, which enter as constants: double, or the same pack.
+// Each term of u − A must stay one D stream times one N stream: the adjoint relies on it.
 template <typename T, typename C>
 void ansatz_product_rule(const StreamLayout& layout, const C* a, const C* d, const T* n, T* u) {
   u[0] = a[0] + d[0] * n[0];
@@ -160,17 +170,14 @@ class Ansatz {
   std::vector<Jet> base_jets(const Eigen::MatrixXd& x, bool second) const;
   Jet factor_jet(const Eigen::MatrixXd& x, bool second) const;
 
-  // A and D streams at x for `layout` (throws std::invalid_argument on Taylor streams), and
-  // J with `with_jacobian` (for repeated adjoints on the same points).
-  AnsatzStreams streams(const StreamLayout& layout, const Eigen::MatrixXd& x,
-                        bool with_jacobian = false) const;
-  // J at points [first, first + count) of s, from ansatz_product_rule in ceres::Jet.
-  static AnsatzJacobian jacobian(const StreamLayout& layout, const AnsatzStreams& s,
-                                 Eigen::Index first, Eigen::Index count);
+  // A and D streams at x for `layout` (throws std::invalid_argument on Taylor streams).
+  AnsatzStreams streams(const StreamLayout& layout, const Eigen::MatrixXd& x) const;
+  // The nonzero M_ijk of ansatz_product_rule for `layout`, from ceres::Jet passes.
+  static std::vector<AnsatzTerm> bilinear_terms(const StreamLayout& layout);
   // u streams from network streams n for points [first, first + n.points) of `s`.
   void apply(const StreamLayout& layout, const AnsatzStreams& s, Eigen::Index first,
              const Streams<double>& n, Streams<double>& u) const;
-  // n_bar += ∂(Σ ū ⊙ u)/∂n = Jᵀ ū (s.jacobian when there, else J built for this block).
+  // n_bar += ∂(Σ ū ⊙ u)/∂n, from s.terms (from bilinear_terms when s has none).
   void adjoint(const StreamLayout& layout, const AnsatzStreams& s, Eigen::Index first,
                const Streams<double>& u_bar, Streams<double>& n_bar) const;
   // u values at x from network values (n × channels).

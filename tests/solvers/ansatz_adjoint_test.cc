@@ -1,15 +1,16 @@
 // SPDX-License-Identifier: MIT
 //
 // The hard-condition ansatz u = A + D·N (solvers/conditions/hard_constraints.h) on random
-// layouts: `apply` (the product rule in double) and `adjoint` (its transpose read off
-// ceres::Jet passes) against the hand-written formulas they replaced, kept here as the
-// reference; the adjoint against central differences of the forward map; and the
-// dot-product identity <ū, J n> = <Jᵀ ū, n>.
+// layouts: `apply` (the product rule in double) and `adjoint` (from the rule's bilinear
+// coefficients, read off ceres::Jet passes) against the hand-written formulas they
+// replaced, kept here as the reference; the adjoint against central differences of the
+// forward map; the dot-product identity <ū, J n> = <Jᵀ ū, n>; the coefficients themselves.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <random>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "solvers/conditions/hard_constraints.h"
@@ -165,10 +166,7 @@ TEST(AnsatzAdjoint, JetAdjointMatchesHandWrittenAndFiniteDifferences) {
       const StreamLayout layout(spec);
       const std::string where = c.name + ", " + std::to_string(layout.tangents()) + " tangents, " +
                                 std::to_string(layout.operators()) + " operators";
-      const AnsatzStreams s = c.ansatz.streams(layout, x, /*with_jacobian=*/true);
-      const AnsatzStreams bare = c.ansatz.streams(layout, x);
-      ASSERT_TRUE(s.jacobian.has_value());
-      ASSERT_FALSE(bare.jacobian.has_value());
+      const AnsatzStreams s = c.ansatz.streams(layout, x);
       const int width = c.ansatz.channels();
       const Streams<double> n = random_streams(block, layout.count(), width, rng);
       const Streams<double> u_bar = random_streams(block, layout.count(), width, rng);
@@ -179,15 +177,17 @@ TEST(AnsatzAdjoint, JetAdjointMatchesHandWrittenAndFiniteDifferences) {
       reference_apply(layout, s, first, n, u_ref);
       EXPECT_LT(relative(u.data, u_ref.data), 1e-14) << where;
 
-      // adjoint: precomputed J, J built per block, and the hand-written transpose. They add
-      // to n_bar: start from the same nonzero contents.
+      // adjoint against the hand-written transpose, with the coefficients s carries and
+      // with those computed on the call. They add to n_bar: start from the same contents.
       Streams<double> start = random_streams(block, layout.count(), width, rng);
-      Streams<double> jet = start, per_block = start, ref = start;
+      Streams<double> jet = start, ref = start, on_call = start;
       c.ansatz.adjoint(layout, s, first, u_bar, jet);
-      c.ansatz.adjoint(layout, bare, first, u_bar, per_block);
       reference_adjoint(layout, s, first, u_bar, ref);
       EXPECT_LT(relative(jet.data, ref.data), 1e-14) << where;
-      EXPECT_EQ(jet.data, per_block.data) << where;
+      AnsatzStreams bare = s;
+      bare.terms.clear();
+      c.ansatz.adjoint(layout, bare, first, u_bar, on_call);
+      EXPECT_EQ(on_call.data, jet.data) << where;
 
       // Central differences of L(n) = <ū, apply(n)>. apply is affine in n, so they have no
       // truncation error at any step: only rounding, of about ε Σ|ū ⊙ u| / h.
@@ -220,36 +220,20 @@ TEST(AnsatzAdjoint, JetAdjointMatchesHandWrittenAndFiniteDifferences) {
   EXPECT_EQ(checked, (4 + 4) + (4 + 4) + (4 + 5));  // layouts per case: 4 + d + 2
 }
 
-// J keeps only the entries that are nonzero somewhere: for the Laplacian in 2D with D = x
-// (one hard face, x_min), D_y = 0, so ∂u_y/∂N⁰ and ∂Δu/∂N_y drop out; the rest are those of
-// the hand-written transpose.
-TEST(AnsatzAdjoint, JacobianKeepsTheNonzeroEntries) {
-  const Domain d({0.0, 0.0}, {1.0, 1.0});
-  const Ansatz ansatz(d, 1, Ansatz::Dirichlet{{d.face("x_min")}, expressions(d, {"y"})},
-                      std::nullopt);
+// The coefficients M_ijk for the 2D Laplacian layout: D⁰N⁰ in u⁰; D⁽ⁱ⁾N⁰ and D⁰N⁽ⁱ⁾ in
+// u⁽ⁱ⁾; ΔD N⁰, D⁰ ΔN and 2 D⁽ⁱ⁾N⁽ⁱ⁾ in Δu; nothing else.
+TEST(AnsatzAdjoint, BilinearTermsOfTheLaplacian) {
   const StreamLayout layout(autodiff::StreamSpec::laplacian(2));
-  Random sampler(1);
-  const Eigen::MatrixXd x = d.sample_interior(sampler, 7);
-  const AnsatzStreams s = ansatz.streams(layout, x, /*with_jacobian=*/true);
-  const int value = 0, tx = layout.tangent(0), ty = layout.tangent(1), lap = layout.op(0);
-  // D = x: D⁰ = x, D⁽ˣ⁾ = 1, D⁽ʸ⁾ = 0, ΔD = 0.
-  const std::vector<std::pair<int, int>> want{
-      {value, value}, {tx, value}, {tx, tx}, {ty, ty}, {lap, tx}, {lap, lap}};
-  auto got = s.jacobian->entries;
+  const int v = 0, x = layout.tangent(0), y = layout.tangent(1), lap = layout.op(0);
+  std::vector<std::tuple<int, int, int, double>> want{
+      {v, v, v, 1},     {x, v, x, 1},     {x, x, v, 1},     {y, v, y, 1},    {y, y, v, 1},
+      {lap, v, lap, 1}, {lap, lap, v, 1}, {lap, x, x, 2.0}, {lap, y, y, 2.0}};
+  std::vector<std::tuple<int, int, int, double>> got;
+  for (const AnsatzTerm& t : Ansatz::bilinear_terms(layout))
+    got.emplace_back(t.u, t.n, t.d, t.coefficient);
+  std::sort(want.begin(), want.end());
   std::sort(got.begin(), got.end());
-  auto sorted = want;
-  std::sort(sorted.begin(), sorted.end());
-  EXPECT_EQ(got, sorted);
-  for (size_t e = 0; e < s.jacobian->entries.size(); ++e) {
-    const auto [i, j] = s.jacobian->entries[e];
-    const Eigen::VectorXd v = s.jacobian->values.col(static_cast<Eigen::Index>(e));
-    if (i == lap && j == tx)  // Σᵢⱼ Cᵢⱼ (D⁽ⁱ⁾N⁽ʲ⁾ + D⁽ʲ⁾N⁽ⁱ⁾) with C = I: 2 D⁽ˣ⁾
-      EXPECT_EQ(v, Eigen::VectorXd::Constant(x.rows(), 2.0));
-    else if (i == tx && j == value)
-      EXPECT_EQ(v, Eigen::VectorXd::Ones(x.rows()));
-    else
-      EXPECT_EQ(v, x.col(0)) << i << ", " << j;  // D⁰ on the diagonal
-  }
+  EXPECT_EQ(got, want);
 }
 
 }  // namespace
