@@ -72,8 +72,9 @@
 // N streams) makes that test fail.
 //
 // The streams of A and D come from their gradient ∇ and Hessian H in input coordinates:
-// a⁽ⁱ⁾ = ∇a·vᵢ, a^[C] = Σ_ab (V C Vᵀ)_ab H_ab. D is a polynomial: exact. A is built from the
-// config's expressions: a constant is exact (zero derivatives); otherwise 4th-order central
+// a⁽ⁱ⁾ = ∇a·vᵢ, a^[C] = Σ_ab (V C Vᵀ)_ab H_ab. D is a product of closed forms (polynomials,
+// and tanh with a time scale): its derivatives are exact. A is built from the config's
+// expressions: a constant is exact (zero derivatives); otherwise 4th-order central
 // differences with step h_a = 10⁻³ × (extent of axis a), the tensor product of the stencil
 // (1, −8, 0, 8, −1)/12h for mixed second derivatives and (−1, 16, −30, 16, −1)/12h² on the
 // diagonal, skipped along axes the expression does not mention. The error is about
