@@ -113,6 +113,15 @@ PointKey key_of(const double* p) {
   return k;
 }
 
+// n rows of `pool` drawn uniformly, with replacement.
+Eigen::MatrixXd draw_rows(const Eigen::MatrixXd& pool, Random& rng, Eigen::Index n) {
+  Eigen::MatrixXd x(n, pool.cols());
+  const auto count = static_cast<double>(pool.rows());
+  for (Eigen::Index p = 0; p < n; ++p)
+    x.row(p) = pool.row(std::min(pool.rows() - 1, static_cast<Eigen::Index>(uniform01(rng) * count)));
+  return x;
+}
+
 Domain sdf_domain(const io::ConfigNode& root) {
   if (!root.has("domain")) return Domain({-1, -1, -1}, {1, 1, 1});
   const io::ConfigNode node = root.child("domain");
@@ -209,13 +218,7 @@ class Sdf final : public Problem {
     surface.name = "surface";
     surface.batch_key = "surface";
     surface.spec = autodiff::StreamSpec::gradient(3);
-    surface.sample = [this](Random& rng, Eigen::Index n) {
-      Eigen::MatrixXd x(n, 3);
-      const auto count = static_cast<double>(points_.rows());
-      for (Eigen::Index p = 0; p < n; ++p)
-        x.row(p) = points_.row(std::min(points_.rows() - 1, static_cast<Eigen::Index>(uniform01(rng) * count)));
-      return x;
-    };
+    surface.sample = [this](Random& rng, Eigen::Index n) { return draw_rows(points_, rng, n); };
     surface.residual = [this](const Eigen::MatrixXd& x) -> std::unique_ptr<Residual> {
       return make_sdf_residual(normals_at(x), true, weights_);
     };
@@ -232,13 +235,7 @@ class Sdf final : public Problem {
     box.name = "box";
     box.batch_key = "box";
     box.spec = autodiff::StreamSpec::values(3);
-    box.sample = [this](Random& rng, Eigen::Index n) {
-      Eigen::MatrixXd x(n, 3);
-      const auto count = static_cast<double>(box_points_.rows());
-      for (Eigen::Index p = 0; p < n; ++p)
-        x.row(p) = box_points_.row(std::min(box_points_.rows() - 1, static_cast<Eigen::Index>(uniform01(rng) * count)));
-      return x;
-    };
+    box.sample = [this](Random& rng, Eigen::Index n) { return draw_rows(box_points_, rng, n); };
     box.residual = [this](const Eigen::MatrixXd& x) -> std::unique_ptr<Residual> {
       const double root = std::sqrt(box_weight_);
       Eigen::MatrixXd target(x.rows(), 1);

@@ -58,17 +58,24 @@ void write_smooth_picture(const fs::path& path, int width, int height) {
   writer->Write();
 }
 
-// Residual rows of a zero field: minus the targets.
-Eigen::MatrixXd targets(const LossTerm& term, const Eigen::MatrixXd& x) {
-  const auto residual = term.residual(x);
+// The residual rows of term at x for a field whose gradient there is `gradient` (value and
+// second derivatives 0).
+Eigen::MatrixXd residual_rows(const LossTerm& term, const Eigen::MatrixXd& x, const Eigen::Vector2d& gradient) {
   const autodiff::StreamLayout layout(term.spec);
   autodiff::Streams<double> out;
   out.points = x.rows();
   out.count = layout.count();
   out.data = Eigen::MatrixXd::Zero(x.rows() * out.count, 1);
+  if (layout.count() > 1)
+    for (int a = 0; a < 2; ++a) out.data.middleRows(layout.tangent(a) * x.rows(), x.rows()).setConstant(gradient(a));
   Eigen::MatrixXd r;
-  residual->evaluate(0, layout, out, r);
-  return -r;
+  term.residual(x)->evaluate(0, layout, out, r);
+  return r;
+}
+
+// Residual rows of a zero field: minus the targets.
+Eigen::MatrixXd targets(const LossTerm& term, const Eigen::MatrixXd& x) {
+  return -residual_rows(term, x, Eigen::Vector2d::Zero());
 }
 
 const char* kSmoothConfig = R"yaml(
@@ -139,16 +146,7 @@ TEST(PoissonImage, FluxTermUsesTheOutwardNormal) {
   const LossTerm flux = setup.problem->loss_terms().at(1);
   Random rng(2);
   const Eigen::MatrixXd x = flux.sample(rng, 200).x;
-  const auto residual = flux.residual(x);
-  const autodiff::StreamLayout layout(flux.spec);
-  autodiff::Streams<double> out;
-  out.points = x.rows();
-  out.count = layout.count();
-  out.data = Eigen::MatrixXd::Zero(x.rows() * out.count, 1);
-  out.data.middleRows(layout.tangent(0) * x.rows(), x.rows()).setConstant(1.0);
-  out.data.middleRows(layout.tangent(1) * x.rows(), x.rows()).setConstant(2.0);
-  Eigen::MatrixXd r;
-  residual->evaluate(0, layout, out, r);
+  const Eigen::MatrixXd r = residual_rows(flux, x, Eigen::Vector2d(1.0, 2.0));
   for (Eigen::Index i = 0; i < x.rows(); ++i) {
     const bool x_side = std::abs(x(i, 0)) == 1.0;
     ASSERT_TRUE(x_side || std::abs(x(i, 1)) == 1.0) << x.row(i);
