@@ -17,12 +17,15 @@ using autodiff::Streams;
 namespace {
 
 constexpr int kMaxDim = 4;
-constexpr int kMaxCorners = 1 << kMaxDim;
+constexpr int kMaxTaps = 4;                    // vertices per axis: 2, or 4 with cubic
+constexpr int kMaxCorners = 1 << (2 * kMaxDim);  // 4^4
 constexpr std::uint32_t kPrimes[kMaxDim] = {1u, 2654435761u, 805459861u, 3674653429u};
 
 bool is_smoothstep(const EncodingOptions& o) {
   return Registry<int>::lower(o.interpolation) == "smoothstep";
 }
+
+bool is_cubic(const EncodingOptions& o) { return Registry<int>::lower(o.interpolation) == "cubic"; }
 
 // out = a·b for series of n coefficients, truncated.
 template <typename Scalar>
@@ -60,7 +63,8 @@ std::vector<HashGridLevel> hash_grid_levels(const EncodingOptions& o, int input_
     const double n = std::floor(o.base_resolution * std::pow(growth, l) * (1 + 1e-9));
     HashGridLevel& level = levels[l];
     level.resolution = static_cast<int>(std::clamp(n, 1.0, static_cast<double>(o.finest_resolution)));
-    const double vertices = std::pow(level.resolution + 2.0, input_dim);
+    // Vertices 0 … N + 1 per axis, or −1 … N + 2 with cubic's four taps.
+    const double vertices = std::pow(level.resolution + (is_cubic(o) ? 4.0 : 2.0), input_dim);
     level.dense = vertices <= table;
     level.rows = static_cast<Eigen::Index>(level.dense ? vertices : table);
     level.first_row = first;
@@ -74,8 +78,10 @@ std::vector<HashGridLevel> hash_grid_levels(const EncodingOptions& o, int input_
 
 template <typename Scalar>
 struct HashGridEncoding<Scalar>::Cell {
-  std::uint32_t rows[kMaxCorners];  // table row of each corner; bit j of the corner index is v_j − c_j
-  Scalar phi[kMaxDim][4];           // φ_j and its derivatives of order 1–3 in x_j
+  // Corner v's tap on axis j is digit j of v in base taps (bits j·b … j·b + b − 1, b = log2
+  // taps): vertex c_j + tap (linear, smoothstep) or c_j − 1 + tap (cubic).
+  std::uint32_t rows[kMaxCorners];  // table row of each corner
+  Scalar w[kMaxDim][kMaxTaps][4];   // tap weight on axis j and its derivatives of order 1–3 in x_j
   Scalar t[kMaxDim];                // t_j (held in [0, 1] where smoothstep holds it)
   Scalar scale[kMaxDim];            // ∂t_j/∂x_j: 0 where t_j is held
 };
@@ -86,14 +92,15 @@ struct HashGridEncoding<Scalar>::Cell {
 // so that Σᵢⱼ Cᵢⱼ a⁽ⁱ⁾ᵀ ∇²W a⁽ʲ⁾ = ⟨∇²W, M_q⟩ costs d² per corner, whatever T is.
 template <typename Scalar>
 struct HashGridEncoding<Scalar>::Offsets {
-  Offsets(const StreamLayout& layout, int d)
+  Offsets(const StreamLayout& layout, int d, int bits)
       : d(d),
+        bits(bits),
         tangents(layout.tangents()),
         operators(layout.operators()),
         dirs(layout.taylor_dirs()),
         order(layout.taylor_order()),
         streams(layout.count()),
-        corners(1 << d) {
+        corners(1 << (d * bits)) {
     a = d;
     b = a + tangents * d;
     m = b + operators * d;
@@ -102,19 +109,19 @@ struct HashGridEncoding<Scalar>::Offsets {
   }
   int taylor_at(int p, int k) const { return taylor + (p * order + k - 1) * d; }
 
-  int d, tangents, operators, dirs, order, streams, corners;
+  int d, bits, tangents, operators, dirs, order, streams, corners;
   int a, b, m, taylor, stride;
 };
 
 namespace {
 
-// Derivative of order `order` of corner v's factor on axis j: φ_j if v_j = c_j + 1,
-// 1 − φ_j if v_j = c_j.
+// Corner v's tap on axis j (`bits` = log2 of the taps per axis).
+inline int tap(int v, int j, int bits) { return (v >> (j * bits)) & ((1 << bits) - 1); }
+
+// Derivative of order `order` of corner v's factor on axis j.
 template <typename Cell>
-auto factor(const Cell& cell, int v, int j, int order) {
-  const auto f = cell.phi[j][order];
-  if ((v >> j) & 1) return f;
-  return order == 0 ? 1 - f : -f;
+auto factor(const Cell& cell, int v, int j, int order, int bits) {
+  return cell.w[j][tap(v, j, bits)][order];
 }
 
 }  // namespace
@@ -124,6 +131,8 @@ HashGridEncoding<Scalar>::HashGridEncoding(const EncodingOptions& options, int i
     : dim_(input_dim),
       features_(options.features_per_level),
       smoothstep_(is_smoothstep(options)),
+      cubic_(is_cubic(options)),
+      bits_(cubic_ ? 2 : 1),
       include_input_(options.include_input),
       init_scale_(options.init_scale) {
   if (input_dim < 1 || input_dim > kMaxDim)
@@ -144,7 +153,7 @@ HashGridEncoding<Scalar>::HashGridEncoding(const EncodingOptions& options, int i
     for (int j = 0; j < dim_; ++j) {
       level.scale[j] = static_cast<Scalar>(info.resolution / range[j]);
       level.stride[j] = info.dense ? static_cast<std::uint32_t>(stride) : 0u;
-      stride *= static_cast<std::uint64_t>(info.resolution) + 2;
+      stride *= static_cast<std::uint64_t>(info.resolution) + (cubic_ ? 4 : 2);
     }
     level.mask = static_cast<std::uint32_t>((std::uint64_t{1} << options.log2_table_size) - 1);
     grid_.push_back(level);
@@ -157,7 +166,8 @@ std::uint32_t HashGridEncoding<Scalar>::row(int level, const int* vertex) const 
   const Level& g = grid_.at(level);
   std::uint32_t r = 0;
   for (int j = 0; j < dim_; ++j) {
-    const auto v = static_cast<std::uint32_t>(vertex[j]);
+    // Cubic's vertices start at −1: stored one further.
+    const auto v = static_cast<std::uint32_t>(vertex[j] + (cubic_ ? 1 : 0));
     if (g.info.dense)
       r += v * g.stride[j];
     else
@@ -175,10 +185,39 @@ bool HashGridEncoding<Scalar>::initialize(Scalar* params, std::mt19937_64& rng) 
   return true;
 }
 
+namespace {
+
+// The four uniform cubic B-spline weights of vertices c − 1 … c + 2 at t ∈ [0, 1) and their
+// derivatives of order 1–3 in x (s = ∂t/∂x): w[tap][order].
+template <typename Scalar>
+void cubic_weights(Scalar t, Scalar s, Scalar (*w)[4]) {
+  const Scalar u = 1 - t, t2 = t * t, s2 = s * s, s3 = s2 * s;
+  constexpr Scalar sixth = Scalar(1) / 6;
+  w[0][0] = u * u * u * sixth;
+  w[0][1] = -Scalar(0.5) * u * u * s;
+  w[0][2] = u * s2;
+  w[0][3] = -s3;
+  w[1][0] = (3 * t2 * t - 6 * t2 + 4) * sixth;
+  w[1][1] = (Scalar(1.5) * t2 - 2 * t) * s;
+  w[1][2] = (3 * t - 2) * s2;
+  w[1][3] = 3 * s3;
+  w[2][0] = (-3 * t2 * t + 3 * t2 + 3 * t + 1) * sixth;
+  w[2][1] = (-Scalar(1.5) * t2 + t + Scalar(0.5)) * s;
+  w[2][2] = (1 - 3 * t) * s2;
+  w[2][3] = -3 * s3;
+  w[3][0] = t2 * t * sixth;
+  w[3][1] = Scalar(0.5) * t2 * s;
+  w[3][2] = t * s2;
+  w[3][3] = s3;
+}
+
+}  // namespace
+
 template <typename Scalar>
 void HashGridEncoding<Scalar>::locate(const Level& level, const Scalar* x, Cell& cell) const {
   const Scalar last = static_cast<Scalar>(level.info.resolution);
-  std::uint32_t term[kMaxDim][2];
+  const int taps = 1 << bits_;
+  std::uint32_t term[kMaxDim][kMaxTaps];
   for (int j = 0; j < dim_; ++j) {
     const Scalar s = level.scale[j];
     const Scalar p = (x[j] - lower_[j]) * s + Scalar(0.5);
@@ -186,36 +225,48 @@ void HashGridEncoding<Scalar>::locate(const Level& level, const Scalar* x, Cell&
     if (!(c >= 0)) c = 0;  // NaN too
     if (c > last) c = last;
     Scalar t = p - c;
-    Scalar* f = cell.phi[j];
     cell.scale[j] = s;
-    if (!smoothstep_) {
-      f[0] = t;
-      f[1] = s;
-      f[2] = f[3] = 0;
-    } else if (t >= 0 && t <= 1) {
-      f[0] = t * t * (3 - 2 * t);
-      f[1] = 6 * s * t * (1 - t);
-      f[2] = 6 * s * s * (1 - 2 * t);
-      f[3] = -12 * s * s * s;
+    if (cubic_) {
+      // Outside [0, 1) (beyond the box's outer half cells) the outer cell's cubic continues.
+      cubic_weights(t, s, cell.w[j]);
     } else {
-      t = t < 0 ? Scalar(0) : Scalar(1);
-      f[0] = t;
-      f[1] = f[2] = f[3] = 0;
-      cell.scale[j] = 0;
+      Scalar f[4];
+      if (!smoothstep_) {
+        f[0] = t;
+        f[1] = s;
+        f[2] = f[3] = 0;
+      } else if (t >= 0 && t <= 1) {
+        f[0] = t * t * (3 - 2 * t);
+        f[1] = 6 * s * t * (1 - t);
+        f[2] = 6 * s * s * (1 - 2 * t);
+        f[3] = -12 * s * s * s;
+      } else {
+        t = t < 0 ? Scalar(0) : Scalar(1);
+        f[0] = t;
+        f[1] = f[2] = f[3] = 0;
+        cell.scale[j] = 0;
+      }
+      // Vertex c_j weighs 1 − φ_j, vertex c_j + 1 weighs φ_j.
+      cell.w[j][0][0] = 1 - f[0];
+      cell.w[j][1][0] = f[0];
+      for (int k = 1; k < 4; ++k) {
+        cell.w[j][0][k] = -f[k];
+        cell.w[j][1][k] = f[k];
+      }
     }
     cell.t[j] = t;
+    // The first tap's vertex is c_j, or c_j − 1 stored one further (cubic): c_j either way.
     const auto v = static_cast<std::uint32_t>(static_cast<int>(c));
     const std::uint32_t weight = level.info.dense ? level.stride[j] : kPrimes[j];
-    term[j][0] = v * weight;
-    term[j][1] = (v + 1) * weight;
+    for (int k = 0; k < taps; ++k) term[j][k] = (v + k) * weight;
   }
-  const int corners = 1 << dim_;
+  const int corners = 1 << (dim_ * bits_);
   for (int v = 0; v < corners; ++v) {
     std::uint32_t r = 0;
     if (level.info.dense) {
-      for (int j = 0; j < dim_; ++j) r += term[j][(v >> j) & 1];
+      for (int j = 0; j < dim_; ++j) r += term[j][tap(v, j, bits_)];
     } else {
-      for (int j = 0; j < dim_; ++j) r ^= term[j][(v >> j) & 1];
+      for (int j = 0; j < dim_; ++j) r ^= term[j][tap(v, j, bits_)];
       r &= level.mask;
     }
     cell.rows[v] = r;
@@ -263,7 +314,7 @@ void HashGridEncoding<Scalar>::corner_weights(const StreamLayout& layout, const 
   for (int v = 0; v < corners; ++v) {
     Scalar g[kMaxDim][3];
     for (int j = 0; j < d; ++j)
-      for (int k = 0; k <= (second ? 2 : first ? 1 : 0); ++k) g[j][k] = factor(cell, v, j, k);
+      for (int k = 0; k <= (second ? 2 : first ? 1 : 0); ++k) g[j][k] = factor(cell, v, j, k, o.bits);
     Scalar w = 1;
     for (int j = 0; j < d; ++j) w *= g[j][0];
     kappa[v] = w;
@@ -304,15 +355,15 @@ void HashGridEncoding<Scalar>::corner_weights(const StreamLayout& layout, const 
 
 namespace {
 
-// Scratch series of one point and level: φ_j(τ) per axis, t_j(τ), t², t³ and two rows of
-// corner products.
+// Scratch series of one point and level: the taps' weights w_{j,k}(τ) per axis, t_j(τ), t²,
+// t³ and two rows of corner products.
 template <typename Scalar>
 struct SeriesScratch {
-  void size(int d, int corners, int n) {
+  void size(int d, int taps, int corners, int n) {
     this->n = n;
-    data.resize(static_cast<size_t>((4 * d + 2 * corners + 4) * n));
-    phi = data.data();
-    t = phi + d * n;
+    data.resize(static_cast<size_t>(((taps + 3) * d + 2 * corners + 4) * n));
+    weights = data.data();
+    t = weights + taps * d * n;
     t2 = t + d * n;
     t3 = t2 + d * n;
     products = t3 + d * n;
@@ -324,31 +375,29 @@ struct SeriesScratch {
   }
   int n = 0;
   std::vector<Scalar> data;
-  Scalar *phi, *t, *t2, *t3, *products, *next, *one_minus, *tmp, *bar, *bar2;
+  Scalar *weights, *t, *t2, *t3, *products, *next, *one_minus, *tmp, *bar, *bar2;
 };
 
 }  // namespace
 
-// φ_j(t_j(τ)) with t_j(τ) = t_j + s_j Σ_k a_{p,k,j} τᵏ; then every corner's product.
+// w_{j,k}(t_j(τ)) with t_j(τ) = t_j + s_j Σ_k a_{p,k,j} τᵏ; then every corner's product.
 template <typename Scalar>
 void HashGridEncoding<Scalar>::taylor_weights(const StreamLayout& layout, const Offsets& o,
                                               const Cell& cell, const Scalar* point,
                                               Scalar* kappa) const {
-  const int d = dim_, corners = o.corners, order = o.order, n = order + 1;
+  const int d = dim_, corners = o.corners, order = o.order, n = order + 1, taps = 1 << bits_;
   thread_local SeriesScratch<Scalar> w;
-  w.size(d, corners, n);
+  w.size(d, taps, corners, n);
   for (int dir = 0; dir < o.dirs; ++dir) {
     for (int j = 0; j < d; ++j) series(o, cell, point, dir, j, w.t + j * n, w.t2 + j * n,
-                                       w.t3 + j * n, w.phi + j * n);
+                                       w.t3 + j * n, w.weights + j * taps * n);
     std::fill(w.products, w.products + n, Scalar(0));
     w.products[0] = 1;
-    for (int j = 0, count = 1; j < d; ++j, count *= 2) {
-      const Scalar* phi = w.phi + j * n;
-      for (int k = 0; k < n; ++k) w.one_minus[k] = (k == 0 ? 1 : 0) - phi[k];
-      for (int v = 0; v < count; ++v) {
-        series_product(w.products + v * n, w.one_minus, w.next + v * n, n);
-        series_product(w.products + v * n, phi, w.next + (v + count) * n, n);
-      }
+    for (int j = 0, count = 1; j < d; ++j, count *= taps) {
+      const Scalar* axis = w.weights + j * taps * n;
+      for (int v = 0; v < count; ++v)
+        for (int k = 0; k < taps; ++k)
+          series_product(w.products + v * n, axis + k * n, w.next + (v + k * count) * n, n);
       std::swap(w.products, w.next);
     }
     for (int v = 0; v < corners; ++v)
@@ -357,14 +406,30 @@ void HashGridEncoding<Scalar>::taylor_weights(const StreamLayout& layout, const 
   }
 }
 
-// The series of t_j and φ_j along Taylor direction `dir` (n = K + 1 coefficients each).
+// The series of t_j and of axis j's tap weights along Taylor direction `dir` (n = K + 1
+// coefficients each; `weights` holds taps · n, tap after tap).
 template <typename Scalar>
 void HashGridEncoding<Scalar>::series(const Offsets& o, const Cell& cell, const Scalar* point,
                                       int dir, int j, Scalar* t, Scalar* t2, Scalar* t3,
-                                      Scalar* phi) const {
+                                      Scalar* weights) const {
   const int n = o.order + 1;
   t[0] = cell.t[j];
   for (int k = 1; k < n; ++k) t[k] = cell.scale[j] * point[o.taylor_at(dir, k) + j];
+  if (cubic_) {
+    series_product(t, t, t2, n);
+    series_product(t2, t, t3, n);
+    constexpr Scalar sixth = Scalar(1) / 6;
+    for (int k = 0; k < n; ++k) {
+      const Scalar one = k == 0 ? Scalar(1) : Scalar(0);
+      weights[k] = (one - 3 * t[k] + 3 * t2[k] - t3[k]) * sixth;
+      weights[n + k] = (4 * one - 6 * t2[k] + 3 * t3[k]) * sixth;
+      weights[2 * n + k] = (one + 3 * t[k] + 3 * t2[k] - 3 * t3[k]) * sixth;
+      weights[3 * n + k] = t3[k] * sixth;
+    }
+    for (int k = 0; k < 4; ++k) weights[k * n] = cell.w[j][k][0];
+    return;
+  }
+  Scalar* phi = weights + n;
   if (!smoothstep_) {
     std::copy(t, t + n, phi);
   } else {
@@ -372,7 +437,8 @@ void HashGridEncoding<Scalar>::series(const Offsets& o, const Cell& cell, const 
     series_product(t2, t, t3, n);
     for (int k = 0; k < n; ++k) phi[k] = 3 * t2[k] - 2 * t3[k];
   }
-  phi[0] = cell.phi[j][0];
+  phi[0] = cell.w[j][1][0];
+  for (int k = 0; k < n; ++k) weights[k] = (k == 0 ? 1 : 0) - phi[k];
 }
 
 // ---------------------------------------------------------------------------------------
@@ -382,7 +448,7 @@ template <typename Scalar>
 void HashGridEncoding<Scalar>::forward(const StreamLayout& layout, const Scalar* params,
                                        const Streams<Scalar>& in, Streams<Scalar>& out,
                                        autodiff::SavedTensors<Scalar>* saved) const {
-  const Offsets o(layout, dim_);
+  const Offsets o(layout, dim_, bits_);
   const Eigen::Index n_points = in.points;
   const int corners = o.corners, streams = o.streams, f_count = features_;
   const auto level_count = static_cast<Eigen::Index>(grid_.size());
@@ -403,10 +469,14 @@ void HashGridEncoding<Scalar>::forward(const StreamLayout& layout, const Scalar*
   }
   if (streams == 1) {
     switch (dim_) {
-      case 1: return forward_values<1>(params, in, out, rows_out, kappa_out);
-      case 2: return forward_values<2>(params, in, out, rows_out, kappa_out);
-      case 3: return forward_values<3>(params, in, out, rows_out, kappa_out);
-      default: return forward_values<4>(params, in, out, rows_out, kappa_out);
+      case 1: return cubic_ ? forward_values<1, 4>(params, in, out, rows_out, kappa_out)
+                            : forward_values<1, 2>(params, in, out, rows_out, kappa_out);
+      case 2: return cubic_ ? forward_values<2, 4>(params, in, out, rows_out, kappa_out)
+                            : forward_values<2, 2>(params, in, out, rows_out, kappa_out);
+      case 3: return cubic_ ? forward_values<3, 4>(params, in, out, rows_out, kappa_out)
+                            : forward_values<3, 2>(params, in, out, rows_out, kappa_out);
+      default: return cubic_ ? forward_values<4, 4>(params, in, out, rows_out, kappa_out)
+                             : forward_values<4, 2>(params, in, out, rows_out, kappa_out);
     }
   }
   gather(layout, o, in, inputs);
@@ -442,16 +512,16 @@ void HashGridEncoding<Scalar>::forward(const StreamLayout& layout, const Scalar*
 
 // The value stream alone (radiance fields, fits of values), the common case: the same
 // weights and rows as locate and corner_weights (bit for bit: the same products in the same
-// order), the 2^D weights by doubling over the axes, with loops of fixed length. Per level,
+// order), the Taps^D weights by multiplying out axis after axis, with loops of fixed length. Per level,
 // a first pass finds every point's rows and weights, and the second gathers the table rows,
 // prefetching a few points ahead: hashed rows are scattered over megabytes, and the loads of
 // several points then overlap instead of waiting one after the other.
 template <typename Scalar>
-template <int D>
+template <int D, int Taps>
 void HashGridEncoding<Scalar>::forward_values(const Scalar* params, const Streams<Scalar>& in,
                                               Streams<Scalar>& out, Scalar* rows_out,
                                               Scalar* kappa_out) const {
-  constexpr int corners = 1 << D;
+  constexpr int corners = Taps == 2 ? 1 << D : 1 << (2 * D);
   constexpr Eigen::Index ahead = 8;  // points
   const Eigen::Index n_points = in.points, in_rows = in.data.rows(), out_rows = out.data.rows();
   const int f_count = features_;
@@ -475,18 +545,31 @@ void HashGridEncoding<Scalar>::forward_values(const Scalar* params, const Stream
         if (!(c >= 0)) c = 0;
         if (c > last) c = last;
         const Scalar t = p - c;
-        const Scalar phi = !smoothstep_              ? t
-                           : (t >= 0 && t <= 1)      ? t * t * (3 - 2 * t)
-                           : t < 0                   ? Scalar(0)
-                                                     : Scalar(1);
         const auto v = static_cast<std::uint32_t>(static_cast<int>(c));
         const std::uint32_t weight = dense ? level.stride[j] : kPrimes[j];
-        const std::uint32_t a0 = v * weight, a1 = (v + 1) * weight;
-        for (int k = 0; k < (1 << j); ++k) {
-          w[k + (1 << j)] = w[k] * phi;
-          w[k] *= 1 - phi;
-          r[k + (1 << j)] = dense ? r[k] + a1 : r[k] ^ a1;
-          r[k] = dense ? r[k] + a0 : r[k] ^ a0;
+        if constexpr (Taps == 2) {
+          const Scalar phi = !smoothstep_              ? t
+                             : (t >= 0 && t <= 1)      ? t * t * (3 - 2 * t)
+                             : t < 0                   ? Scalar(0)
+                                                       : Scalar(1);
+          const std::uint32_t a0 = v * weight, a1 = (v + 1) * weight;
+          for (int k = 0; k < (1 << j); ++k) {
+            w[k + (1 << j)] = w[k] * phi;
+            w[k] *= 1 - phi;
+            r[k + (1 << j)] = dense ? r[k] + a1 : r[k] ^ a1;
+            r[k] = dense ? r[k] + a0 : r[k] ^ a0;
+          }
+        } else {
+          Scalar b[4][4];
+          cubic_weights(t, Scalar(0), b);
+          const int count = 1 << (2 * j);
+          for (int k = 0; k < count; ++k) {
+            for (int tap = 3; tap >= 0; --tap) {
+              const std::uint32_t a = (v + tap) * weight;
+              w[k + tap * count] = w[k] * b[tap][0];
+              r[k + tap * count] = dense ? r[k] + a : r[k] ^ a;
+            }
+          }
         }
       }
       if (!dense)
@@ -570,7 +653,7 @@ void HashGridEncoding<Scalar>::backward(const StreamLayout& layout, const Scalar
                                         const autodiff::SavedTensors<Scalar>& saved,
                                         Streams<Scalar>& out_adjoint, Scalar* gradient,
                                         Streams<Scalar>* in_adjoint) const {
-  const Offsets o(layout, dim_);
+  const Offsets o(layout, dim_, bits_);
   if (gradient) table_adjoint(o, in, saved, out_adjoint, gradient, nullptr);
   if (in_adjoint) input_adjoint(layout, params, in, out_adjoint, *in_adjoint);
 }
@@ -582,7 +665,7 @@ void HashGridEncoding<Scalar>::backward_per_point(const StreamLayout& layout, co
                                                   Streams<Scalar>& out_adjoint,
                                                   autodiff::JacobianRows<Scalar> jacobian,
                                                   Streams<Scalar>* in_adjoint) const {
-  const Offsets o(layout, dim_);
+  const Offsets o(layout, dim_, bits_);
   for (Eigen::Index n = 0; n < in.points; ++n) jacobian.row(n).setZero();
   table_adjoint(o, in, saved, out_adjoint, nullptr, &jacobian);
   if (in_adjoint) input_adjoint(layout, params, in, out_adjoint, *in_adjoint);
@@ -598,7 +681,7 @@ void HashGridEncoding<Scalar>::input_adjoint(const StreamLayout& layout, const S
                                              const Streams<Scalar>& in,
                                              const Streams<Scalar>& out_adjoint,
                                              Streams<Scalar>& in_adjoint) const {
-  const Offsets o(layout, dim_);
+  const Offsets o(layout, dim_, bits_);
   const Eigen::Index n_points = in.points;
   const int d = dim_, corners = o.corners, streams = o.streams, f_count = features_;
   const int plain = 1 + o.tangents + o.operators;  // streams before the Taylor ones
@@ -635,7 +718,7 @@ void HashGridEncoding<Scalar>::input_adjoint(const StreamLayout& layout, const S
         // ∂^α W_v = Π_j (factor j differentiated α_j times).
         auto derivative = [&](const int* alpha) {
           Scalar p = 1;
-          for (int j = 0; j < d; ++j) p *= factor(cell, v, j, alpha[j]);
+          for (int j = 0; j < d; ++j) p *= factor(cell, v, j, alpha[j], bits_);
           return p;
         };
         for (int j = 0; j < d; ++j) {
@@ -707,21 +790,23 @@ void HashGridEncoding<Scalar>::input_adjoint(const StreamLayout& layout, const S
   if (include_input_) a += out_adjoint.data.leftCols(d);
 }
 
-// Reverse of taylor_weights: W̄_v = (0, ω_{(p,1),v}, …, ω_{(p,K),v}) → φ̄_j = Σ_v ± W̄_v ⋆
+// Reverse of taylor_weights: W̄_v = (0, ω_{(p,1),v}, …, ω_{(p,K),v}) → w̄_{j,tap} = Σ_v W̄_v ⋆
 // Π_{m≠j} (corner factor m) → t̄_j → x̄_j += s_j t̄_{j,0}, ā_{p,k,j} += s_j t̄_{j,k}.
 template <typename Scalar>
 void HashGridEncoding<Scalar>::taylor_adjoint(const StreamLayout& layout, const Offsets& o,
                                               const Cell& cell, const Scalar* point,
                                               const Scalar* omega, Scalar* point_adjoint) const {
-  const int d = dim_, corners = o.corners, order = o.order, n = order + 1;
+  const int d = dim_, corners = o.corners, order = o.order, n = order + 1, taps = 1 << bits_;
   thread_local SeriesScratch<Scalar> w;
-  thread_local std::vector<Scalar> phi_bar;
-  w.size(d, corners, n);
-  phi_bar.resize(static_cast<size_t>(d * n));
+  thread_local std::vector<Scalar> weights_bar;
+  w.size(d, taps, corners, n);
+  // Linear and smoothstep: φ̄_j alone (w̄ = φ̄ for tap 1, −φ̄ for tap 0); cubic: each tap's.
+  const int bar_taps = cubic_ ? taps : 1;
+  weights_bar.resize(static_cast<size_t>(d * bar_taps * n));
   for (int dir = 0; dir < o.dirs; ++dir) {
     for (int j = 0; j < d; ++j) series(o, cell, point, dir, j, w.t + j * n, w.t2 + j * n,
-                                       w.t3 + j * n, w.phi + j * n);
-    std::fill(phi_bar.begin(), phi_bar.end(), Scalar(0));
+                                       w.t3 + j * n, w.weights + j * taps * n);
+    std::fill(weights_bar.begin(), weights_bar.end(), Scalar(0));
     for (int v = 0; v < corners; ++v) {
       Scalar* w_bar = w.bar;
       w_bar[0] = 0;
@@ -738,41 +823,57 @@ void HashGridEncoding<Scalar>::taylor_adjoint(const StreamLayout& layout, const 
         others[0] = 1;
         for (int m = 0; m < d; ++m) {
           if (m == j) continue;
-          const Scalar* phi = w.phi + m * n;
-          if ((v >> m) & 1) {
-            std::copy(phi, phi + n, w.one_minus);
-          } else {
-            for (int k = 0; k < n; ++k) w.one_minus[k] = (k == 0 ? 1 : 0) - phi[k];
-          }
-          series_product(others, w.one_minus, w.tmp, n);
+          series_product(others, w.weights + (m * taps + tap(v, m, bits_)) * n, w.tmp, n);
           std::copy(w.tmp, w.tmp + n, others);
         }
         std::fill(w.bar2, w.bar2 + n, Scalar(0));
         series_product_adjoint(w_bar, others, w.bar2, n);
-        const Scalar sign = ((v >> j) & 1) ? Scalar(1) : Scalar(-1);
-        for (int k = 0; k < n; ++k) phi_bar[j * n + k] += sign * w.bar2[k];
+        const int k_tap = tap(v, j, bits_);
+        if (cubic_) {
+          Scalar* out = weights_bar.data() + (j * taps + k_tap) * n;
+          for (int k = 0; k < n; ++k) out[k] += w.bar2[k];
+        } else {
+          const Scalar sign = k_tap ? Scalar(1) : Scalar(-1);
+          for (int k = 0; k < n; ++k) weights_bar[j * n + k] += sign * w.bar2[k];
+        }
       }
     }
     for (int j = 0; j < d; ++j) {
-      const Scalar* pb = phi_bar.data() + j * n;
-      // phi[0] is cell.phi[j][0] itself, whose derivative in t_j is φ'(t_j).
+      // weights[0] is the cell's own weight, whose derivative in t_j is that of the series.
       Scalar* t_bar = w.bar;
       std::fill(t_bar, t_bar + n, Scalar(0));
-      if (!smoothstep_) {
-        std::copy(pb, pb + n, t_bar);
-      } else {
-        const Scalar* t = w.t + j * n;
-        const Scalar* t2 = w.t2 + j * n;
-        Scalar* t2_bar = w.bar2;
-        Scalar* t3_bar = w.tmp;
+      const Scalar* t = w.t + j * n;
+      const Scalar* t2 = w.t2 + j * n;
+      Scalar* t2_bar = w.bar2;
+      Scalar* t3_bar = w.tmp;
+      if (cubic_) {
+        // w₀ = (1 − 3t + 3t² − t³)/6, w₁ = (4 − 6t² + 3t³)/6, w₂ = (1 + 3t + 3t² − 3t³)/6,
+        // w₃ = t³/6, read off per power of t.
+        const Scalar* b = weights_bar.data() + j * taps * n;
         for (int k = 0; k < n; ++k) {
-          t2_bar[k] = 3 * pb[k];
-          t3_bar[k] = -2 * pb[k];
+          const Scalar b0 = b[k], b1 = b[n + k], b2 = b[2 * n + k], b3 = b[3 * n + k];
+          t_bar[k] = Scalar(0.5) * (b2 - b0);
+          t2_bar[k] = Scalar(0.5) * (b0 + b2) - b1;
+          t3_bar[k] = (b3 - b0) / 6 + Scalar(0.5) * (b1 - b2);
         }
         series_product_adjoint(t3_bar, t, t2_bar, n);  // t³ = t² · t
         series_product_adjoint(t3_bar, t2, t_bar, n);
         series_product_adjoint(t2_bar, t, t_bar, n);   // t² = t · t, both factors
         series_product_adjoint(t2_bar, t, t_bar, n);
+      } else {
+        const Scalar* pb = weights_bar.data() + j * n;
+        if (!smoothstep_) {
+          std::copy(pb, pb + n, t_bar);
+        } else {
+          for (int k = 0; k < n; ++k) {
+            t2_bar[k] = 3 * pb[k];
+            t3_bar[k] = -2 * pb[k];
+          }
+          series_product_adjoint(t3_bar, t, t2_bar, n);  // t³ = t² · t
+          series_product_adjoint(t3_bar, t2, t_bar, n);
+          series_product_adjoint(t2_bar, t, t_bar, n);   // t² = t · t, both factors
+          series_product_adjoint(t2_bar, t, t_bar, n);
+        }
       }
       const Scalar s = cell.scale[j];
       point_adjoint[j] += s * t_bar[0];

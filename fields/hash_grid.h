@@ -104,7 +104,8 @@ class HashGridEncoding final : public autodiff::Module<Scalar> {
                           autodiff::Streams<Scalar>* in_adjoint) const override;
 
   const std::vector<HashGridLevel>& levels() const { return levels_; }
-  // Row of level l's table (0 … R_l − 1) holding grid vertex v (d integer coordinates).
+  // Row of level l's table (0 … R_l − 1) holding grid vertex v (d integer coordinates, each
+  // 0 … N_l + 1, or −1 … N_l + 2 with cubic).
   std::uint32_t row(int level, const int* vertex) const;
 
  private:
@@ -113,7 +114,7 @@ class HashGridEncoding final : public autodiff::Module<Scalar> {
   struct Level {
     HashGridLevel info;
     Scalar scale[4];          // ∂t_j/∂x_j = N_l / (upper_j − lower_j)
-    std::uint32_t stride[4];  // dense: (N_l + 2)^j
+    std::uint32_t stride[4];  // dense: (N_l + 2)^j, or (N_l + 4)^j with cubic
     std::uint32_t mask;       // hashed: T − 1
   };
 
@@ -122,12 +123,12 @@ class HashGridEncoding final : public autodiff::Module<Scalar> {
   void gather(const autodiff::StreamLayout& layout, const Offsets& o,
               const autodiff::Streams<Scalar>& in, std::vector<Scalar>& inputs) const;
   void series(const Offsets& o, const Cell& cell, const Scalar* point, int dir, int axis,
-              Scalar* t, Scalar* t2, Scalar* t3, Scalar* phi) const;
+              Scalar* t, Scalar* t2, Scalar* t3, Scalar* weights) const;
   void table_adjoint(const Offsets& o, const autodiff::Streams<Scalar>& in,
                      const autodiff::SavedTensors<Scalar>& saved,
                      const autodiff::Streams<Scalar>& out_adjoint, Scalar* gradient,
                      autodiff::JacobianRows<Scalar>* jacobian) const;
-  template <int D>
+  template <int D, int Taps>
   void forward_values(const Scalar* params, const autodiff::Streams<Scalar>& in,
                       autodiff::Streams<Scalar>& out, Scalar* rows_out, Scalar* kappa_out) const;
   void corner_weights(const autodiff::StreamLayout& layout, const Offsets& o, const Cell& cell,
@@ -143,6 +144,8 @@ class HashGridEncoding final : public autodiff::Module<Scalar> {
   int dim_;
   int features_;
   bool smoothstep_;
+  bool cubic_;
+  int bits_;  // log2 of the vertices per axis of a point's stencil: 1, or 2 with cubic
   bool include_input_;
   double init_scale_;
   Scalar lower_[4];

@@ -33,7 +33,7 @@ void check_range(const std::string& option, int value, int lowest, int highest) 
 }
 
 const std::vector<std::string>& interpolations() {
-  static const std::vector<std::string> names{"linear", "smoothstep"};
+  static const std::vector<std::string> names{"linear", "smoothstep", "cubic"};
   return names;
 }
 
@@ -49,7 +49,7 @@ class HashGridType final : public EncodingTypeOf<HashGridType> {
       reject("init_scale", std::to_string(o.init_scale), "must be a finite number > 0");
     const std::string kind = Registry<int>::lower(o.interpolation);
     if (std::find(interpolations().begin(), interpolations().end(), kind) == interpolations().end())
-      reject("interpolation", "'" + o.interpolation + "'", "must be linear or smoothstep");
+      reject("interpolation", "'" + o.interpolation + "'", "must be linear, smoothstep or cubic");
   }
   void validate_inputs(const EncodingOptions&, int input_dim) const override {
     if (input_dim < 1 || input_dim > kMaxDim)

@@ -223,6 +223,7 @@ std::vector<JacobianCase> jacobian_cases() {
   }
   cases.push_back({{"siren", "sine", "fourier"}, 2});  // a parameter-free module before the first Dense
   cases.push_back({{"mlp", "tanh", "hash_grid"}, 1});  // an encoding with parameters
+  cases.push_back({{"mlp", "tanh", "hash_grid", "cubic"}, 1});  // 4^d vertices per level
   return cases;
 }
 

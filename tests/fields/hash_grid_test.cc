@@ -132,8 +132,8 @@ TEST(HashGridRows, DenseAndHashedRowsByHand) {
 }
 
 // Values on both sides of a face of each level (a dense and a hashed one), along each axis.
-TEST(HashGridContinuity, ValueAcrossFacesAndSmoothstepGradientToo) {
-  for (const char* interpolation : {"linear", "smoothstep"})
+TEST(HashGridContinuity, ValueAcrossFacesAndSmoothstepAndCubicGradientToo) {
+  for (const char* interpolation : {"linear", "smoothstep", "cubic"})
     for (int d : {2, 3}) {
       const EncodingOptions o = grid(interpolation, 2, 10, 3, 40, d, -1, 1);
       HashGridEncoding<double> encoding(o, d);
@@ -160,12 +160,127 @@ TEST(HashGridContinuity, ValueAcrossFacesAndSmoothstepGradientToo) {
           EXPECT_LE((value.row(0) - value.row(1)).cwiseAbs().maxCoeff(), 1e-6) << where;
           const Eigen::RowVectorXd jump = slope.row(0) - slope.row(1);
           const double slope_jump = jump.segment(2 * l, 2).cwiseAbs().maxCoeff();
-          if (std::string(interpolation) == "smoothstep")
+          if (std::string(interpolation) != "linear")
             EXPECT_LE(slope_jump, 1e-5 * n) << where;
           else
             EXPECT_GE(slope_jump, 1e-2) << where;  // linear weights: the gradient jumps
         }
     }
+}
+
+// Cubic levels are C²: ∂²/∂x_j² is continuous across faces (smoothstep's jumps there).
+TEST(HashGridCubic, SecondDerivativesContinuousAcrossFaces) {
+  for (int d : {2, 3}) {
+    const EncodingOptions o = grid("cubic", 2, 10, 3, 40, d, -1, 1);
+    HashGridEncoding<double> encoding(o, d);
+    ASSERT_TRUE(encoding.levels()[0].dense);
+    ASSERT_FALSE(encoding.levels()[1].dense);
+    std::mt19937_64 rng(7 + d);
+    const Eigen::VectorXd params = random_matrix(encoding.parameter_count(), 1, rng);
+    for (int axis = 0; axis < d; ++axis) {
+      StreamSpec spec = StreamSpec::gradient(d);
+      Eigen::MatrixXd c = Eigen::MatrixXd::Zero(d, d);
+      c(axis, axis) = 1;
+      spec.add_operator(c);
+      const StreamLayout layout(spec);
+      for (int l = 0; l < 2; ++l) {
+        const int n = encoding.levels()[l].resolution;
+        Eigen::MatrixXd x = random_matrix(2, d, rng, -0.9, 0.9);
+        const double face = (2 - 0.5) * 2.0 / n - 1;
+        x(0, axis) = face - 1e-9;
+        x(1, axis) = face + 1e-9;
+        for (int k = 1; k < d; ++k) x(1, (axis + k) % d) = x(0, (axis + k) % d);
+        const Matrix<double> s = module_streams(encoding, params.data(), layout, x);
+        const auto curvature = s.middleRows(layout.op(0) * 2, 2).middleCols(2 * l, 2);
+        const double scale = curvature.cwiseAbs().maxCoeff();
+        EXPECT_GT(scale, 1e-3 * n * n);
+        EXPECT_LE((curvature.row(0) - curvature.row(1)).cwiseAbs().maxCoeff(), 1e-6 * scale)
+            << "d=" << d << " level " << l << " axis " << axis;
+      }
+    }
+  }
+}
+
+// Dense rows of a cubic level: vertices −1 … N + 2 per axis, stored one further.
+TEST(HashGridCubic, RowsStartOneVertexBeforeTheBox) {
+  const EncodingOptions o = grid("cubic", 2, 10, 2, 40, 2);
+  HashGridEncoding<double> encoding(o, 2);
+  ASSERT_TRUE(encoding.levels()[0].dense);
+  EXPECT_EQ(encoding.levels()[0].rows, 6 * 6);  // (N + 4)²
+  ASSERT_FALSE(encoding.levels()[1].dense);
+  const int first[2] = {-1, -1}, last[2] = {4, 4}, v[2] = {2, -1};
+  EXPECT_EQ(encoding.row(0, first), 0u);
+  EXPECT_EQ(encoding.row(0, last), 35u);
+  EXPECT_EQ(encoding.row(0, v), 3u);
+  const int h[2] = {5, 7};
+  EXPECT_EQ(encoding.row(1, h), (6u ^ (8u * 2654435761u)) & 1023u);
+}
+
+// B-splines reproduce quadratics: with level coefficients c_i = f(i) − (f_{p₀p₀} + f_{p₁p₁})/6
+// for a quadratic f of the level's coordinates p = N x + 1/2, the feature is f everywhere in
+// the box, outer half cells included (they reach the vertices −1 and N + 2), and so are its
+// gradient and its constant Laplacian, which smoothstep's weights cannot carry.
+TEST(HashGridCubic, ALevelReproducesAQuadratic) {
+  const int n = 5;
+  const EncodingOptions o = grid("cubic", 1, 10, n, n, 2);
+  HashGridEncoding<double> encoding(o, 2);
+  ASSERT_TRUE(encoding.levels()[0].dense);
+  // f(p) = a + b·p + ½ pᵀ H p.
+  const double a = 0.3, b0 = -1.1, b1 = 0.7, h00 = 0.9, h01 = -0.4, h11 = 2.3;
+  auto f = [&](double p0, double p1) {
+    return a + b0 * p0 + b1 * p1 + 0.5 * (h00 * p0 * p0 + 2 * h01 * p0 * p1 + h11 * p1 * p1);
+  };
+  Eigen::VectorXd params = Eigen::VectorXd::Zero(encoding.parameter_count());
+  for (int i = -1; i <= n + 2; ++i)
+    for (int j = -1; j <= n + 2; ++j) {
+      const int v[2] = {i, j};
+      params[encoding.row(0, v) * 2] = f(i, j) - (h00 + h11) / 6;
+      params[encoding.row(0, v) * 2 + 1] = 1;  // partition of unity
+    }
+  const StreamLayout layout(StreamSpec::laplacian(2));
+  std::mt19937_64 rng(3);
+  Eigen::MatrixXd x = random_matrix(40, 2, rng, 0, 1);
+  x.row(0) << 0, 0;
+  x.row(1) << 1, 1;
+  x.row(2) << 0, 1;
+  const Matrix<double> s = module_streams(encoding, params.data(), layout, x);
+  const Eigen::Index m = x.rows();
+  for (Eigen::Index p = 0; p < m; ++p) {
+    const double p0 = n * x(p, 0) + 0.5, p1 = n * x(p, 1) + 0.5;
+    EXPECT_NEAR(s(p, 0), f(p0, p1), 1e-12) << p;
+    EXPECT_NEAR(s(p, 1), 1, 1e-14) << p;
+    EXPECT_NEAR(s(layout.tangent(0) * m + p, 0), n * (b0 + h00 * p0 + h01 * p1), 1e-11) << p;
+    EXPECT_NEAR(s(layout.tangent(1) * m + p, 0), n * (b1 + h01 * p0 + h11 * p1), 1e-11) << p;
+    EXPECT_NEAR(s(layout.op(0) * m + p, 0), n * n * (h00 + h11), 1e-10) << p;
+    EXPECT_NEAR(s(layout.tangent(0) * m + p, 1), 0, 1e-12) << p;
+    EXPECT_NEAR(s(layout.op(0) * m + p, 1), 0, 1e-10) << p;
+  }
+}
+
+// Over one cell, ∂²/∂x₀² of a smoothstep level averages to zero for any table; a cubic
+// level's does not (midpoint rule, exact for smoothstep's s'' linear in t).
+TEST(HashGridCubic, MeanCurvatureOverACellIsZeroOnlyForSmoothstep) {
+  for (const char* interpolation : {"smoothstep", "cubic"}) {
+    const int n = 4;
+    const EncodingOptions o = grid(interpolation, 1, 10, n, n, 2);
+    HashGridEncoding<double> encoding(o, 2);
+    std::mt19937_64 rng(17);
+    const Eigen::VectorXd params = random_matrix(encoding.parameter_count(), 1, rng);
+    StreamSpec spec = StreamSpec::gradient(2);
+    spec.add_operator(Eigen::Matrix2d{{1, 0}, {0, 0}});
+    const StreamLayout layout(spec);
+    const int k = 64;  // points across the cell p₀ ∈ [2, 3), at p₁ = 2.3
+    Eigen::MatrixXd x(k, 2);
+    for (int i = 0; i < k; ++i) x.row(i) << (2 + (i + 0.5) / k - 0.5) / n, (2.3 - 0.5) / n;
+    const Matrix<double> s = module_streams(encoding, params.data(), layout, x);
+    const Eigen::MatrixXd curvature = s.middleRows(layout.op(0) * k, k);
+    const double mean = curvature.col(0).mean(), size = curvature.col(0).cwiseAbs().maxCoeff();
+    ASSERT_GT(size, 0.1);
+    if (std::string(interpolation) == "smoothstep")
+      EXPECT_LE(std::abs(mean), 1e-12 * size);
+    else
+      EXPECT_GE(std::abs(mean), 1e-2 * size);
+  }
 }
 
 TEST(HashGridLinear, NoPureSecondDerivativesInsideCellsButMixedOnes) {
@@ -443,7 +558,7 @@ TEST_P(HashGridInNetwork, JacobianRowsArePerPointGradients) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Interpolations, HashGridInNetwork,
-                         ::testing::Values("linear", "smoothstep"));
+                         ::testing::Values("linear", "smoothstep", "cubic"));
 
 // ---------------------------------------------------------------------------------------
 // Field, checkpoint and config.
@@ -580,8 +695,8 @@ std::string edited(const std::string& from, const std::string& to) {
 }
 
 TEST(HashGridConfig, BadValuesNameFileLineAndKey) {
-  expect_error(edited("interpolation: smoothstep", "interpolation: cubic"), 11,
-               "field.encoding.interpolation", "linear, smoothstep");
+  expect_error(edited("interpolation: smoothstep", "interpolation: quintic"), 11,
+               "field.encoding.interpolation", "linear, smoothstep, cubic");
   expect_error(edited("log2_table_size: 12", "log2_table_size: 25"), 8,
                "field.encoding.log2_table_size", "10");
   expect_error(edited("log2_table_size: 12", "log2_table_size: 9"), 8,
@@ -607,8 +722,9 @@ TEST(HashGridOptions, ValidationNamesTheOptionAndTheRule) {
   EXPECT_NE(message().find("encoding.log2_table_size = 30: must be in [10, 24]"), std::string::npos);
   o = {};
   o.type = "hash_grid";
-  o.interpolation = "cubic";
-  EXPECT_NE(message().find("encoding.interpolation = 'cubic'"), std::string::npos) << message();
+  o.interpolation = "quintic";
+  EXPECT_NE(message().find("encoding.interpolation = 'quintic': must be linear, smoothstep or cubic"),
+            std::string::npos) << message();
   o = {};
   o.type = "hash_grid";
   o.lower = {0, 0};

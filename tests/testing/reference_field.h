@@ -340,17 +340,22 @@ class ReferenceField {
     return dense(a, options_.output_dim);
   }
 
-  // y_l(x) = Σ_corners Π_j (φ_j or 1 − φ_j) T_l[row(corner)], level after level.
+  // y_l(x) = Σ_corners Π_j (axis j's weight of the corner) T_l[row(corner)], level after
+  // level: 2 vertices per axis weighing 1 − φ_j and φ_j, or with cubic the 4 vertices
+  // c_j − 1 … c_j + 2 weighing the uniform cubic B-spline's (1 − t)³/6, (3t³ − 6t² + 4)/6,
+  // (−3t³ + 3t² + 3t + 1)/6, t³/6 (vertices stored one further: they start at −1).
   template <typename T>
   std::vector<T> hash_grid(const std::vector<T>& x, std::vector<double>* pre) const {
     static constexpr std::uint32_t kPrimes[4] = {1u, 2654435761u, 805459861u, 3674653429u};
     const fields::EncodingOptions& e = options_.encoding;
     const int d = options_.input_dim, features = e.features_per_level;
-    const bool smooth = Registry<int>::lower(e.interpolation) == "smoothstep";
+    const std::string kind = Registry<int>::lower(e.interpolation);
+    const bool smooth = kind == "smoothstep", cubic = kind == "cubic";
+    const int taps = cubic ? 4 : 2;
     std::vector<T> out;
     for (const fields::HashGridLevel& level : levels_) {
       const int n = level.resolution;
-      std::vector<T> phi(d);
+      std::vector<std::vector<T>> weight(d, std::vector<T>(taps));
       std::vector<std::int64_t> cell(d);
       for (int j = 0; j < d; ++j) {
         const double lo = e.lower.empty() ? 0.0 : e.lower[j];
@@ -360,24 +365,39 @@ class ReferenceField {
         const double c = std::clamp(std::floor(value_of(p)), 0.0, static_cast<double>(n));
         cell[j] = static_cast<std::int64_t>(c);
         const T t = p - constant<T>(c);
+        if (cubic) {
+          const T u = constant<T>(1.0) - t, t2 = t * t, t3 = t2 * t;
+          const T sixth = constant<T>(1.0 / 6.0);
+          weight[j][0] = u * u * u * sixth;
+          weight[j][1] = (constant<T>(3.0) * t3 - constant<T>(6.0) * t2 + constant<T>(4.0)) * sixth;
+          weight[j][2] = (constant<T>(-3.0) * t3 + constant<T>(3.0) * t2 + constant<T>(3.0) * t +
+                          constant<T>(1.0)) * sixth;
+          weight[j][3] = t3 * sixth;
+          continue;
+        }
+        T phi;
         if (!smooth)
-          phi[j] = t;
+          phi = t;
         else if (value_of(t) < 0 || value_of(t) > 1)
-          phi[j] = constant<T>(value_of(t) < 0 ? 0.0 : 1.0);
+          phi = constant<T>(value_of(t) < 0 ? 0.0 : 1.0);
         else
-          phi[j] = t * t * (constant<T>(3.0) - constant<T>(2.0) * t);
+          phi = t * t * (constant<T>(3.0) - constant<T>(2.0) * t);
+        weight[j][0] = constant<T>(1.0) - phi;
+        weight[j][1] = phi;
       }
       std::vector<T> y(features, constant<T>(0.0));
-      for (int corner = 0; corner < (1 << d); ++corner) {
+      int corners = 1;
+      for (int j = 0; j < d; ++j) corners *= taps;
+      for (int corner = 0; corner < corners; ++corner) {
         T w = constant<T>(1.0);
         std::uint64_t dense_row = 0, stride = 1;
         std::uint32_t hash = 0;
-        for (int j = 0; j < d; ++j) {
-          const int bit = (corner >> j) & 1;
-          w = w * (bit ? phi[j] : constant<T>(1.0) - phi[j]);
-          const std::int64_t vertex = cell[j] + bit;
+        for (int j = 0, rest = corner; j < d; ++j, rest /= taps) {
+          const int tap = rest % taps;
+          w = w * weight[j][tap];
+          const std::int64_t vertex = cell[j] + tap;  // stored vertex (cubic: c_j − 1 + tap, + 1)
           dense_row += static_cast<std::uint64_t>(vertex) * stride;
-          stride *= static_cast<std::uint64_t>(n) + 2;
+          stride *= static_cast<std::uint64_t>(n) + (cubic ? 4 : 2);
           hash ^= static_cast<std::uint32_t>(vertex) * kPrimes[j];
         }
         const std::uint64_t row =

@@ -257,14 +257,18 @@ inline Eigen::MatrixXd reference_streams(const ReferenceField& ref, const Stream
 
 // ---------------------------------------------------------------------------------------
 // Network cases: every registered activation (as an mlp) and SIREN, each with every
-// registered encoding. A newly registered activation or encoding becomes a case by itself.
+// registered encoding, and with each variant of an encoding that has some (hash_grid's
+// interpolations beyond the default case's smoothstep). A newly registered activation or
+// encoding becomes a case by itself.
 
 struct NetworkCase {
   std::string type;        // siren | mlp
   std::string activation;  // mlp's activation ("sine" for siren)
   std::string encoding;
+  std::string variant = {};  // hash_grid: the interpolation, empty for smoothstep
   std::string name() const {
     std::string s = type == "siren" ? "siren_" + encoding : type + "_" + activation + "_" + encoding;
+    if (!variant.empty()) s += "_" + variant;
     for (char& c : s)
       if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
     return s;
@@ -274,9 +278,13 @@ struct NetworkCase {
 inline std::vector<NetworkCase> registered_network_cases() {
   std::vector<NetworkCase> cases;
   for (const std::string& encoding : fields::encoding_names()) {
-    cases.push_back({"siren", "sine", encoding});
-    for (const std::string& activation : fields::activation_names())
-      cases.push_back({"mlp", activation, encoding});
+    std::vector<std::string> variants{""};
+    if (encoding == "hash_grid") variants.push_back("cubic");
+    for (const std::string& variant : variants) {
+      cases.push_back({"siren", "sine", encoding, variant});
+      for (const std::string& activation : fields::activation_names())
+        cases.push_back({"mlp", activation, encoding, variant});
+    }
   }
   return cases;
 }
@@ -292,7 +300,7 @@ inline std::string case_name(const ::testing::TestParamInfo<NetworkCase>& info) 
 }
 
 // A small random network: hidden [8, 8], moderate encodings (positional L = 3, Fourier
-// features 8 with σ = 1, hash grid of 3 smoothstep levels N = 2, 3, 6 over the points' box
+// features 8 with σ = 1, hash grid of 3 smoothstep (or the case's variant) levels N = 2, 3, 6 over the points' box
 // [−1, 1]^d with 2^10 rows, hashed for d = 4, tables U(−0.5, 0.5)), SIREN with its defaults ω₀ = 30, an mlp sine
 // with frequency 2.
 inline fields::FieldOptions small_options(const NetworkCase& c, int input_dim, int output_dim,
@@ -316,7 +324,7 @@ inline fields::FieldOptions small_options(const NetworkCase& c, int input_dim, i
   o.encoding.log2_table_size = 10;
   o.encoding.base_resolution = 2;
   o.encoding.finest_resolution = 6;
-  o.encoding.interpolation = "smoothstep";
+  o.encoding.interpolation = c.variant.empty() ? "smoothstep" : c.variant;
   o.encoding.init_scale = 0.5;  // features of order 1, as after training
   // One bound per coordinate: an encoding that reads variances has input_dim / 2 of them.
   const int coordinates = fields::encoding_type(c.encoding).reads_variances() ? input_dim / 2 : input_dim;
