@@ -15,11 +15,29 @@
 // (⊕_j v_j π_j) mod T, π = (1, 2654435761, 805459861, 3674653429), in 32-bit arithmetic.
 // γ(x) = [x if include_input, y_0, …, y_{L−1}]: L·F features, level-major.
 //
+// `cubic`: a uniform cubic B-spline per level. The table rows are B-spline coefficients
+// (not values at the vertices; they are learned either way), and y_l sums over the 4^d
+// vertices c − 1 … c + 2 around the cell, W_v = Π_j β_{v_j − c_j + 1}(t_j) with
+//   β₀ = (1 − t)³/6,  β₁ = (3t³ − 6t² + 4)/6,  β₂ = (−3t³ + 3t² + 3t + 1)/6,  β₃ = t³/6,
+// i.e. vertex i weighs B(p_j − i), B the centred cubic B-spline (support [−2, 2]). The level
+// is then C² everywhere, and since Σ_i B(p − i) = 1, Σ_i i B(p − i) = p and
+// Σ_i i² B(p − i) = p² + 1/3, it reproduces every quadratic: coefficients
+// c_i = f(i) − f''/6 give f exactly. Coarse levels so carry a smooth, nonzero mean curvature
+// (a Laplacian of one sign across many cells), which a smoothstep level cannot (below). The
+// stencil reaches one vertex beyond the box's N_l + 2 per axis: the level's vertex grid is
+// extended by one on each side, vertices −1 … N_l + 2 stored at index v + 1 (no clamping, so
+// reproduction holds in the outer cells too), row(v) = Σ_j (v_j + 1)(N_l + 4)^j while
+// (N_l + 4)^d ≤ T, else the same hash of v + 1. Cost: 4^d vertices per level and point
+// instead of 2^d (16 in 2D, 64 in 3D, 256 in 4D), in the table gathers, their weights and
+// the scatter of the reverse pass alike; expect ≈ 3–4× the encoding time of `linear` in 2D
+// and ≈ 8× in 3D.
+//
 // Why x may be kept: inside a cell a smoothstep feature's second derivative along an axis
 // has zero mean (its slope vanishes on both faces), so mean curvature, such as a Poisson
 // solution with a source of one sign needs everywhere, can only come from the network's own
 // nonlinearity acting on the features; with x beside them the network forms it as an MLP of
-// x does and the grid adds detail (configs/poisson_2d_hash_grid.yaml).
+// x does and the grid adds detail (configs/poisson_2d_hash_grid.yaml). A cubic level carries
+// mean curvature itself.
 //
 // Why the half-cell offset: smoothstep has zero slope on cell faces, so a level with faces
 // on the box boundary has ∂y_l/∂n = 0 there, and with every level so aligned the field is
@@ -34,7 +52,7 @@
 //   value     κ = W                     tangent i   κ = ∇W · a⁽ⁱ⁾
 //   operator  κ = ∇W · a^[C] + Σᵢⱼ Cᵢⱼ a⁽ⁱ⁾ᵀ ∇²W a⁽ʲ⁾
 //   Taylor    κ_k = coefficient k of W(a₀ + a₁τ + … + a_Kτᴷ): truncated products of the
-//             per-axis series (φ is a polynomial in t inside a cell)
+//             per-axis series (φ and β are polynomials in t inside a cell)
 // Every stream is linear in the tables, so the reverse pass to them is
 // T̄_l[row(v)] += Σ_streams κ_v ȳ: tangent, operator and Taylor losses train the tables too.
 // The input adjoint differentiates κ once more (∇²W, ∇³W, adjoints of series products).
@@ -43,11 +61,15 @@
 // continuous; with `linear` its gradient jumps and ∂²/∂x_j² vanishes inside cells (only mixed
 // second derivatives remain), so second-order residuals see little of it; with `smoothstep`
 // the gradient is continuous (s' = 0 at 0 and 1) and all second derivatives are present,
-// jumping across faces. More than half a cell outside the box, `linear` extends the outer
-// cells linearly and `smoothstep` holds t_j in [0, 1] (a constant extension, still C¹);
-// nothing wraps around.
+// jumping across faces; with `cubic` second derivatives are continuous too, third ones
+// (β''' = −1, 3, −3, 1 times N³) are constant in a cell and jump across faces, higher ones
+// vanish inside cells. More than half a cell outside the box, `linear` extends the outer
+// cells linearly, `smoothstep` holds t_j in [0, 1] (a constant extension, still C¹) and
+// `cubic` continues the outer cells' cubics (C² at the switch, growing like the cube of the
+// distance far out); nothing wraps around.
 //
-// Parameters: level after level, a table of R_l = min(T, (N_l + 2)^d) rows × F, row-major
+// Parameters: level after level, a table of R_l = min(T, (N_l + 2)^d) rows × F (cubic:
+// (N_l + 4)^d), row-major
 // (feature fastest): coarse dense levels hold exactly their vertices. Initialized
 // U(−init_scale, init_scale), 10⁻⁴ by default as in Instant NGP. Inputs of dimension 1 to 4.
 #pragma once
