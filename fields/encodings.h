@@ -67,7 +67,7 @@ struct EncodingOptions {
   int log2_table_size = 19;       // hash_grid: T = 2^log2_table_size entries per level, 10…24
   int base_resolution = 16;       // hash_grid: N_min cells per axis on the coarsest level
   int finest_resolution = 512;    // hash_grid: N_max on the finest level
-  std::string interpolation = "linear";  // hash_grid: linear | smoothstep
+  std::string interpolation = "linear";  // hash_grid: linear | smoothstep | cubic
   double init_scale = 1e-4;       // hash_grid: tables start U(−init_scale, init_scale)
   // The box [lower, upper] the inputs come from (the field's domain), one bound per input
   // (per coordinate, for an encoding that reads variances beside them);

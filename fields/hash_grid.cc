@@ -361,21 +361,20 @@ template <typename Scalar>
 struct SeriesScratch {
   void size(int d, int taps, int corners, int n) {
     this->n = n;
-    data.resize(static_cast<size_t>(((taps + 3) * d + 2 * corners + 4) * n));
+    data.resize(static_cast<size_t>(((taps + 3) * d + 2 * corners + 3) * n));
     weights = data.data();
     t = weights + taps * d * n;
     t2 = t + d * n;
     t3 = t2 + d * n;
     products = t3 + d * n;
     next = products + corners * n;
-    one_minus = next + corners * n;
-    tmp = one_minus + n;
+    tmp = next + corners * n;
     bar = tmp + n;
     bar2 = bar + n;
   }
   int n = 0;
   std::vector<Scalar> data;
-  Scalar *weights, *t, *t2, *t3, *products, *next, *one_minus, *tmp, *bar, *bar2;
+  Scalar *weights, *t, *t2, *t3, *products, *next, *tmp, *bar, *bar2;
 };
 
 }  // namespace
