@@ -33,6 +33,7 @@ const std::vector<AccuracyCase>& accuracy_cases() {
        {{"chamfer_mean_per_diagonal", 5e-3, false}, {"surface_components", 1, false}},
        600},
       {"poisson_image", "poisson_image", {{"psnr_db", 40, true}}, 600},
+      {"poisson_image_laplacian", "poisson_image_laplacian", {{"psnr_db", 32, true}}, 600},
       {"fit_image", "fit_image", {{"psnr_db", 50, true}}, 60},
       {"fit_audio", "fit_audio", {{"snr_db", 40, true}}, 120},
       {"fit_video", "fit_video", {{"psnr_mean", 30, true}}, 600},
