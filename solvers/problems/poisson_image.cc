@@ -67,6 +67,9 @@ class PoissonImage final : public Problem {
       image = io::box_downsample(image, downsample);
     }
     if (crop > 0) image = io::central_crop(image, crop, crop);
+    if (image.width < 3 || image.height < 3)
+      throw equation.error("image", "a picture of " + std::to_string(image.width) + " x " + std::to_string(image.height) +
+                                        " pixels; at least 3 x 3 are needed");
     width_ = image.width;
     height_ = image.height;
     // Grey: the mean of the colour channels (alpha dropped), row r of the picture in row r.

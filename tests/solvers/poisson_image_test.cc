@@ -196,6 +196,9 @@ TEST(PoissonImage, BadKeysAreLocated) {
   expect_located_error(small, {6, 15, "equation.downsample", "fewer than 3 pixels of the 96 x 80 image"});
   expect_located_error(bad_config("  flux_weight: -1\n"), {4, 16, "equation.flux_weight", ""});
   expect_located_error(bad_config("  zoom: 2\n"), {4, 3, "equation.zoom", "unknown key 'zoom'"});
+  const fs::path thin = smooth_config("gradient");
+  write_smooth_picture(thin.parent_path() / "smooth.png", 40, 2);
+  expect_located_error(thin, {4, 10, "equation.image", "40 x 2 pixels"});
 }
 
 }  // namespace
