@@ -61,10 +61,14 @@ Ansatz::Ansatz(const Domain& domain, int channels, std::optional<Dirichlet> diri
     throw std::invalid_argument("Ansatz: hard initial conditions need a time interval");
 }
 
-Jet Ansatz::expression_jet(const io::Expression& e, const Eigen::MatrixXd& x, bool second,
-                           bool frozen_time) const {
+Jet Ansatz::expression_jet(const io::Expression& e, const Eigen::MatrixXd& x,
+                           const std::vector<bool>& hessian, bool frozen_time) const {
   const Eigen::Index n = x.rows();
   const int d = domain_.input_dim();
+  const bool second = !hessian.empty();
+  auto needed = [&](int a, int b) {
+    return hessian[static_cast<size_t>(a * d + b)] || hessian[static_cast<size_t>(b * d + a)];
+  };
   Eigen::MatrixXd base = x;
   if (frozen_time) base.col(domain_.time_column()).setConstant(domain_.time().first);
   Jet jet = Jet::constant(n, d, 0.0);
@@ -93,12 +97,13 @@ Jet Ansatz::expression_jet(const io::Expression& e, const Eigen::MatrixXd& x, bo
       diag += kSecond[k] * f;
     }
     jet.gradient.col(a) = first / h(a);
-    if (second) jet.hessian[static_cast<size_t>(a * d + a)] = diag / (h(a) * h(a));
+    if (second && needed(a, a)) jet.hessian[static_cast<size_t>(a * d + a)] = diag / (h(a) * h(a));
   }
   if (second)
     for (size_t p = 0; p < axes.size(); ++p)
       for (size_t q = p + 1; q < axes.size(); ++q) {
         const int a = axes[p], b = axes[q];
+        if (!needed(a, b)) continue;  // 16 evaluations no operator of the layout reads
         Eigen::VectorXd mixed = Eigen::VectorXd::Zero(n);
         for (int i = 0; i < 4; ++i)
           for (int j = 0; j < 4; ++j) {
@@ -128,18 +133,24 @@ Jet linear_jet(const Eigen::MatrixXd& x, int d, int axis, double c, double s, bo
 }  // namespace
 
 std::vector<Jet> Ansatz::base_jets(const Eigen::MatrixXd& x, bool second) const {
+  const size_t d = static_cast<size_t>(domain_.input_dim());
+  return base_jets(x, std::vector<bool>(second ? d * d : 0, true));
+}
+
+std::vector<Jet> Ansatz::base_jets(const Eigen::MatrixXd& x, const std::vector<bool>& hessian) const {
   std::vector<Jet> out;
   const int d = domain_.input_dim();
+  const bool second = !hessian.empty();
   for (int c = 0; c < channels_; ++c) {
     if (initial_) {
-      Jet jet = expression_jet(initial_->value[c], x, second, true);
+      Jet jet = expression_jet(initial_->value[c], x, hessian, true);
       if (initial_->velocity) {
         const Jet tau = linear_jet(x, d, domain_.time_column(), domain_.time().first, 1.0, second);
-        jet = jet + tau * expression_jet((*initial_->velocity)[c], x, second, true);
+        jet = jet + tau * expression_jet((*initial_->velocity)[c], x, hessian, true);
       }
       out.push_back(std::move(jet));
     } else if (dirichlet_) {
-      out.push_back(expression_jet(dirichlet_->values[c], x, second, false));
+      out.push_back(expression_jet(dirichlet_->values[c], x, hessian, false));
     } else {
       Jet zero = Jet::constant(x.rows(), d, 0.0);
       if (!second) zero.hessian.clear();
@@ -215,11 +226,18 @@ AnsatzStreams Ansatz::streams(const StreamLayout& layout, const Eigen::MatrixXd&
   std::vector<Eigen::MatrixXd> kernels;  // V C Vᵀ: the operator in input coordinates
   for (int q = 0; q < layout.operators(); ++q)
     kernels.push_back(v * layout.spec().operators[q] * v.transpose());
+  // The Hessian entries fill_streams reads (none without operators).
+  const int d = domain_.input_dim();
+  std::vector<bool> hessian(second ? static_cast<size_t>(d) * d : 0, false);
+  for (const Eigen::MatrixXd& k : kernels)
+    for (int a = 0; a < d; ++a)
+      for (int b = 0; b < d; ++b)
+        if (k(a, b) != 0) hessian[static_cast<size_t>(a * d + b)] = true;
   AnsatzStreams s;
   const Eigen::Index n = x.rows();
   s.base.resize(n, layout.count(), channels_);
   s.factor.resize(n, layout.count(), 1);
-  const std::vector<Jet> base = base_jets(x, second);
+  const std::vector<Jet> base = base_jets(x, hessian);
   for (int c = 0; c < channels_; ++c) fill_streams(layout, kernels, base[c], c, s.base);
   fill_streams(layout, kernels, factor_jet(x, second), 0, s.factor);
   s.terms = bilinear_terms(layout);
