@@ -115,21 +115,12 @@ TEST_P(ResumeTest, InterruptedRunResumesBitExact) {
   // points, not on new ones). The child writes a line (some 95 bytes) per step into a pipe
   // of 4 KiB that is read no further than that line, so it cannot get more than some 45
   // steps ahead: it stops before the end (80) however late the signal comes.
-  long stopped_after = 0;
-  {
-    Child child({"run", config.string(), "--out", interrupted.string()}, dir, dir / "stderr.txt", 4096);
-    std::string line;
-    while (child.read_line(line)) {
-      long step = 0, total = 0;
-      if (std::sscanf(line.c_str(), "step %ld/%ld", &step, &total) == 2 && step >= 21) {
-        stopped_after = step;
-        break;
-      }
-    }
-    ASSERT_GE(stopped_after, 21) << "no progress line for step 21";
-    ASSERT_EQ(kill(child.pid(), SIGINT), 0);
-    o = child.finish();
-  }
+  const Interrupted stop =
+      interrupt_after_step({"run", config.string(), "--out", interrupted.string()}, dir, dir / "stderr.txt", 21);
+  ASSERT_GE(stop.stopped_after, 21) << "no progress line for step 21";
+  ASSERT_TRUE(stop.signalled);
+  const long stopped_after = stop.stopped_after;
+  o = stop.outcome;
   ASSERT_EQ(o.code, 130) << describe(o);
   EXPECT_FALSE(o.signaled);
   for (const char* file : {"config.yaml", "checkpoint.h5", "metrics.json", "solution.vti", "solution.png"})
@@ -565,21 +556,10 @@ TEST(FitRunTest, ShippedConfigsWriteTheirOutputsAndRefuseBadKeys) {
                                    (dir / "interrupted").string()};
   args.insert(args.end(), small.begin(), small.end());
   args.insert(args.end(), eighty.begin(), eighty.end());
-  {
-    Child child(args, dir, dir / "stderr.txt", 4096);
-    std::string line;
-    long stopped_after = 0;
-    while (child.read_line(line)) {
-      long step = 0, total = 0;
-      if (std::sscanf(line.c_str(), "step %ld/%ld", &step, &total) == 2 && step >= 21) {
-        stopped_after = step;
-        break;
-      }
-    }
-    ASSERT_GE(stopped_after, 21) << "no progress line for step 21";
-    ASSERT_EQ(kill(child.pid(), SIGINT), 0);
-    o = child.finish();
-  }
+  const Interrupted stop = interrupt_after_step(args, dir, dir / "stderr.txt", 21);
+  ASSERT_GE(stop.stopped_after, 21) << "no progress line for step 21";
+  ASSERT_TRUE(stop.signalled);
+  o = stop.outcome;
   ASSERT_EQ(o.code, 130) << describe(o);
   EXPECT_LT(read_json(dir / "interrupted" / "metrics.json")["steps"].get<long>(), 80);
   std::vector<std::string> resumed = eighty;

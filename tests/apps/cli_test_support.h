@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <chrono>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -197,6 +198,33 @@ inline Outcome run_nfield(const std::vector<std::string>& args, const std::files
 inline std::string describe(const Outcome& o) {
   return "exit " + std::to_string(o.code) + (o.signaled ? " (signal)" : "") + "\n--- stdout:\n" +
          o.out + "--- stderr:\n" + o.err;
+}
+
+// Runs `nfield ARGS...` with stdout through a 4 KiB pipe and sends SIGINT once a progress
+// line "step N/…" with N ≥ step has been read. The child writes some 95 bytes a step into
+// a pipe read no further than that line, so it cannot get more than some 45 steps ahead.
+// stopped_after: the step of that line (0 when none came); signalled: kill() succeeded.
+struct Interrupted {
+  Outcome outcome;
+  long stopped_after = 0;
+  bool signalled = false;
+};
+inline Interrupted interrupt_after_step(const std::vector<std::string>& args, const std::filesystem::path& cwd,
+                                        const std::filesystem::path& stderr_file, long step) {
+  Interrupted result;
+  Child child(args, cwd, stderr_file, 4096);
+  std::string line;
+  while (child.read_line(line)) {
+    long at = 0, total = 0;
+    if (std::sscanf(line.c_str(), "step %ld/%ld", &at, &total) == 2 && at >= step) {
+      result.stopped_after = at;
+      break;
+    }
+  }
+  if (result.stopped_after == 0) return result;
+  result.signalled = kill(child.pid(), SIGINT) == 0;
+  result.outcome = child.finish();
+  return result;
 }
 
 }  // namespace nfield::apps::testing
