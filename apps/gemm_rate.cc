@@ -1,10 +1,13 @@
 // SPDX-License-Identifier: MIT
 #include "apps/gemm_rate.h"
 
+#include <immintrin.h>
 #include <omp.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
+#include <cmath>
 
 namespace nfield::apps {
 
@@ -78,6 +81,75 @@ double gemm_gflops(const std::vector<GemmShape>& shapes, Eigen::Index rows, int 
   const double probe_rate = gemm_flops(shapes, probe) / seconds_of([&] { eigen_threaded(probe); }) * 1e-9;
   if (probe_rate < split / 1.5) return split;
   return std::max(split, time([&] { eigen_threaded(rows); }));
+}
+
+namespace {
+
+// Twelve independent chains hide the FMA latency (4 cycles, two pipes on current x86 cores:
+// 8 in flight are enough) and fit in the 16 or 32 vector registers with the two constants.
+constexpr int kChains = 12;
+
+#if defined(__AVX512F__)
+constexpr int kLanes = 16;
+float fma_chains(long iterations) {
+  __m512 acc[kChains];
+  for (int c = 0; c < kChains; ++c) acc[c] = _mm512_set1_ps(static_cast<float>(c));
+  const __m512 m = _mm512_set1_ps(0.999999f), b = _mm512_set1_ps(1e-7f);
+  for (long i = 0; i < iterations; ++i)
+    for (int c = 0; c < kChains; ++c) acc[c] = _mm512_fmadd_ps(acc[c], m, b);
+  float sum = 0;
+  for (int c = 0; c < kChains; ++c) sum += _mm512_reduce_add_ps(acc[c]);
+  return sum;
+}
+#elif defined(__AVX2__) && defined(__FMA__)
+constexpr int kLanes = 8;
+float fma_chains(long iterations) {
+  __m256 acc[kChains];
+  for (int c = 0; c < kChains; ++c) acc[c] = _mm256_set1_ps(static_cast<float>(c));
+  const __m256 m = _mm256_set1_ps(0.999999f), b = _mm256_set1_ps(1e-7f);
+  for (long i = 0; i < iterations; ++i)
+    for (int c = 0; c < kChains; ++c) acc[c] = _mm256_fmadd_ps(acc[c], m, b);
+  alignas(32) float lanes[8];
+  float sum = 0;
+  for (int c = 0; c < kChains; ++c) {
+    _mm256_store_ps(lanes, acc[c]);
+    for (float v : lanes) sum += v;
+  }
+  return sum;
+}
+#else
+constexpr int kLanes = 1;
+float fma_chains(long iterations) {
+  float acc[kChains];
+  for (int c = 0; c < kChains; ++c) acc[c] = static_cast<float>(c);
+  for (long i = 0; i < iterations; ++i)
+    for (int c = 0; c < kChains; ++c) acc[c] = std::fma(acc[c], 0.999999f, 1e-7f);
+  float sum = 0;
+  for (float v : acc) sum += v;
+  return sum;
+}
+#endif
+
+}  // namespace
+
+double fma_peak_gflops(int threads, int repeats) {
+  const long iterations = 200'000'000 / kLanes;  // ~40 ms a run at 115 GFLOP/s a thread
+  volatile float sink = 0;  // keeps the chains from being optimised away
+  auto run = [&] {
+    const auto start = std::chrono::steady_clock::now();
+#pragma omp parallel num_threads(threads)
+    {
+      const float s = fma_chains(iterations);
+#pragma omp critical
+      sink = sink + s;
+    }
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  };
+  run();
+  std::vector<double> seconds;
+  for (int r = 0; r < repeats; ++r) seconds.push_back(run());
+  const double flops = 2.0 * kLanes * kChains * static_cast<double>(iterations) * threads;
+  return flops / median(seconds) * 1e-9;
 }
 
 }  // namespace nfield::apps

@@ -219,6 +219,8 @@ void run_nerf_bench(const NerfBenchOptions& options) {
   const double mlp_gflops = sum.flops / network * 1e-9;
   const auto mean_samples = static_cast<Eigen::Index>(std::llround(static_cast<double>(sum.samples) / n));
   const double gemm = gemm_gflops(shapes, std::max<Eigen::Index>(mean_samples, 1), std::max(3, options.steps / 2));
+  const double peak = fma_peak_gflops(used_threads, 5);
+  const double step_gflop = gemm_flops(shapes, mean_samples) * 1e-9;
   const FrameTiming frame = time_frame(setup, field, options);
 
   char line[1536];
@@ -229,14 +231,15 @@ void run_nerf_bench(const NerfBenchOptions& options) {
       "\"params\": %ld, \"rays_per_s\": %.1f, \"median_step_ms\": %.3f, \"sampling_ms\": %.3f, "
       "\"network_ms\": %.3f, \"rendering_ms\": %.3f, \"adam_ms\": %.3f, \"share_sampling\": %.4f, "
       "\"share_network\": %.4f, \"share_rendering\": %.4f, \"share_adam\": %.4f, \"mlp_gflops\": %.2f, "
-      "\"step_gflops\": %.2f, \"gemm_gflops\": %.2f, \"mlp_gemm_ratio\": %.4f, \"frame_ms\": %.2f, "
+      "\"step_gflops\": %.2f, \"gemm_gflops\": %.2f, \"mlp_gemm_ratio\": %.4f, \"fma_peak_gflops\": %.2f, "
+      "\"mlp_peak_ratio\": %.4f, \"step_gflop\": %.4f, \"frame_ms\": %.2f, "
       "\"frame_pixels\": %ld, \"frame_samples\": %ld}",
       options.config.string().c_str(), rays, static_cast<long>(mean_samples), options.steps, options.warmup,
       used_threads, setup.training.block, static_cast<long>(field.parameter_count()),
       static_cast<double>(rays) / (median_ms * 1e-3), median_ms, 1e3 * sum.sampling / n, 1e3 * network / n,
       1e3 * sum.rendering / n, 1e3 * sum.adam / n, sum.sampling / sum.total, network / sum.total,
       sum.rendering / sum.total, sum.adam / sum.total, mlp_gflops, sum.flops / sum.total * 1e-9, gemm,
-      mlp_gflops / gemm, frame.median_ms, static_cast<long>(frame.pixels), static_cast<long>(frame.samples));
+      mlp_gflops / gemm, peak, mlp_gflops / peak, step_gflop, frame.median_ms, static_cast<long>(frame.pixels), static_cast<long>(frame.samples));
   if (!options.json_only) {
     std::printf("%d steps after %d: %.0f rays/s, median step %.2f ms (%ld samples)\n", options.steps,
                 options.warmup, static_cast<double>(rays) / (median_ms * 1e-3), median_ms,
@@ -247,6 +250,9 @@ void run_nerf_bench(const NerfBenchOptions& options) {
     std::printf("  dense products: %.1f GFLOP/s in the network passes, %.1f over the whole step;\n"
                 "  plain Eigen products of the same shapes: %.1f GFLOP/s (%.0f %%)\n",
                 mlp_gflops, sum.flops / sum.total * 1e-9, gemm, 100 * mlp_gflops / gemm);
+    std::printf("  the machine's float FMA peak on %d threads: %.1f GFLOP/s; the network passes use %.0f %% of it\n"
+                "  (%.2f GFLOP of products a step: no implementation of this step runs faster than %.1f ms)\n",
+                used_threads, peak, 100 * mlp_gflops / peak, step_gflop, 1e3 * step_gflop / peak);
     std::printf("render of a %ld-pixel view, %ld samples: %.1f ms (median of %d)\n",
                 static_cast<long>(frame.pixels), static_cast<long>(frame.samples), frame.median_ms,
                 options.render_repeats);

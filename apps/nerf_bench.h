@@ -15,11 +15,14 @@
 // Reported: rays/s and the median step; the share of the steps' time spent drawing rays, in
 // the network's passes, in the rendering loss (thread time in its callback / threads) and
 // in Adam; the GFLOP/s of the dense layers' products over the time of the network passes
-// against plain Eigen products of the same shapes on the step's sample count (apps/gemm_rate.h);
+// against plain Eigen products of the same shapes on the step's sample count (apps/gemm_rate.h)
+// and against the machine's float FMA peak on the same threads (the ceiling of any
+// implementation: the step's GFLOP of products over it is the shortest step possible);
 // and the median time to render the first test view (every pixel, or every k-th of every
 // k-th row, at the stratified midpoints). Ends with one JSON line:
 //   {"impl": "nfield", "bench": "nerf", "rays_per_s", "median_step_ms", "share_network",
-//    "share_rendering", "mlp_gflops", "gemm_gflops", "mlp_gemm_ratio", "frame_ms", …}
+//    "share_rendering", "mlp_gflops", "gemm_gflops", "mlp_gemm_ratio", "fma_peak_gflops",
+//    "mlp_peak_ratio", "step_gflop", "frame_ms", …}
 #pragma once
 
 #include <filesystem>

@@ -101,5 +101,11 @@ print(f"nfield step: network passes {100 * a['share_network']:.1f} %, rendering 
 print(f"nfield dense products: {a['mlp_gflops']:.1f} GFLOP/s in the network passes = "
       f"{100 * a['mlp_gemm_ratio']:.0f} % of plain Eigen products of the same shapes "
       f"({a['gemm_gflops']:.1f} GFLOP/s)")
+if "fma_peak_gflops" in a:
+    need = 3 * a["step_gflop"] / (b["median_step_ms"] * 1e-3)  # nfield's step in a third of torch's
+    print(f"this machine's float FMA peak ({a['threads']} threads, same run): {a['fma_peak_gflops']:.1f} GFLOP/s; "
+          f"nfield's network passes use {100 * a['mlp_peak_ratio']:.0f} % of it")
+    print(f"3x torch's rays/s needs the step's {a['step_gflop']:.2f} GFLOP of products "
+          f"at {need:.1f} GFLOP/s = {100 * need / a['fma_peak_gflops']:.0f} % of that peak")
 print(f"threads {a['threads']} / {b['threads']}; torch {b['torch']}, BLAS {b['blas']}; results in {sys.argv[1]}")
 EOF

@@ -399,11 +399,14 @@ TEST(NerfBenchTest, PrintsTheFiguresTheComparisonReads) {
   EXPECT_EQ(row["frame_pixels"].get<int>(), 64);  // every 16th pixel of every 16th row of 128²
   for (const char* key : {"rays_per_s", "median_step_ms", "samples_per_step", "network_ms", "rendering_ms",
                           "share_network", "share_rendering", "mlp_gflops", "step_gflops", "gemm_gflops",
-                          "mlp_gemm_ratio", "frame_ms", "frame_samples", "params"}) {
+                          "mlp_gemm_ratio", "fma_peak_gflops", "mlp_peak_ratio", "step_gflop", "frame_ms",
+                          "frame_samples", "params"}) {
     ASSERT_TRUE(row.contains(key)) << key << " missing from " << last;
     EXPECT_GT(row[key].get<double>(), 0) << key << " in " << last;
   }
   EXPECT_LE(row["share_network"].get<double>() + row["share_rendering"].get<double>(), 1.0 + 1e-3);
+  // No product runs above the chip's FMA ceiling: a peak below the step's rate is a broken peak.
+  EXPECT_LT(row["mlp_gflops"].get<double>(), row["fma_peak_gflops"].get<double>()) << last;
 
   write_text(dir / "poisson.yaml",
              poisson_config("{lower: [0, 0], upper: [1, 1]}",
