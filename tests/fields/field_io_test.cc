@@ -10,14 +10,13 @@
 
 #include "fields/encoding_type.h"
 #include "fields/field_io.h"
+#include "tests/testing/scratch.h"
 
 namespace nfield::fields {
 namespace {
 
 std::filesystem::path temp_file(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / "nfield_field_io_test";
-  std::filesystem::create_directories(dir);
-  return dir / name;
+  return testutil::test_folder("field_io") / name;
 }
 
 template <typename Scalar>

@@ -30,6 +30,7 @@
 #include "fields/hash_grid.h"
 #include "tests/testing/squares_loss.h"
 #include "tests/testing/stream_checks.h"
+#include "tests/testing/scratch.h"
 
 namespace nfield::fields {
 namespace {
@@ -590,8 +591,7 @@ TEST(HashGridField, TablesComeFirstAndDrawTheirOwnInitialization) {
 }
 
 TEST(HashGridField, SaveLoadRoundTripIsBitExact) {
-  const auto dir = std::filesystem::temp_directory_path() / "nfield_hash_grid_test";
-  std::filesystem::create_directories(dir);
+  const auto dir = testutil::scratch_dir("hash_grid");
   for (const char* precision : {"float", "double"}) {
     const auto path = dir / (std::string(precision) + ".h5");
     auto round_trip = [&]<typename Scalar>(Field<Scalar> field) {

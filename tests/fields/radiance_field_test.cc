@@ -15,6 +15,7 @@
 #include "fields/field_io.h"
 #include "fields/radiance_network.h"
 #include "tests/testing/squares_loss.h"
+#include "tests/testing/scratch.h"
 
 namespace nfield::fields {
 namespace {
@@ -122,7 +123,7 @@ TEST(RadianceField, PerPointJacobianRowsSumToTheGradient) {
 TEST(RadianceField, CheckpointRoundTripIsBitExact) {
   Field<float> field(small_nerf());
   field.parameters().setRandom();
-  const auto path = std::filesystem::temp_directory_path() / "nfield_radiance_field_test.h5";
+  const auto path = testutil::scratch_dir("radiance_field") / "checkpoint.h5";
   {
     io::H5Writer file(path);
     save_field(file, field);

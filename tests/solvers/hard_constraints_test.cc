@@ -422,7 +422,7 @@ TEST(HardConstraints, PoissonHardBeatsSoft) {
 // The written outputs see u, not N: after a short run (and again through nfield eval's
 // evaluate_checkpoint), the grid's u equals g on the boundary points to rounding.
 TEST(HardConstraints, GridOutputsAndEvalSeeTheAnsatz) {
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "nfield_hard_test";
+  const std::filesystem::path dir = testutil::scratch_dir("hard_constraints");
   RunSetup setup = load_run(write_config("outputs", R"yaml(
 problem: poisson
 domain: {lower: [0, 0], upper: [1, 2]}

@@ -21,6 +21,7 @@
 #include "io/triangle_mesh.h"
 #include "io/vtk_polydata.h"
 #include "solvers/run.h"
+#include "tests/testing/scratch.h"
 
 namespace nfield::solvers {
 namespace {
@@ -28,9 +29,7 @@ namespace {
 constexpr double kPi = std::numbers::pi;
 
 std::filesystem::path test_dir() {
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "nfield_sdf_test";
-  std::filesystem::create_directories(dir);
-  return dir;
+  return testutil::test_folder("sdf");
 }
 
 std::filesystem::path write_config(const std::string& name, const std::string& text) {
