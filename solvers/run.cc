@@ -136,8 +136,15 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
     field.parameters() = saved.parameters();
     trainer.load_state(file);
     setup.problem->load_state(file);
-    if (root)
+    if (root) {
       std::printf("resuming from %s at step %ld\n", resume.string().c_str(), trainer.step());
+      // A finished run resumed with the same stages has nothing left to train: say so rather
+      // than write the same outputs again as if the run had trained.
+      if (trainer.remaining_stages() == 0)
+        std::printf("note: that run finished all %zu stages of training.stages; nothing is trained, the outputs "
+                    "are written again (to train further, add a stage)\n",
+                    setup.training.stages.size());
+    }
   }
   const long first_step = trainer.step();
   if (root) {

@@ -36,6 +36,7 @@
 // depend on it. R = 1 (and a build without MPI) runs as before.
 #pragma once
 
+#include <algorithm>
 #include <functional>
 #include <memory>
 #include <string>
@@ -99,6 +100,9 @@ class Trainer {
   // Loss of each term at the last step (weighted).
   const std::vector<double>& term_losses() const { return losses_; }
   long step() const { return global_step_; }
+  // Stages still to run: none after a finished run (resuming it trains nothing more unless
+  // the config adds a stage).
+  int remaining_stages() const { return std::max(0, static_cast<int>(options_.stages.size()) - stage_); }
   const std::vector<double>& step_milliseconds() const { return step_ms_; }
   // Final loss after each finished stage, in order.
   const std::vector<double>& stage_losses() const { return stage_losses_; }

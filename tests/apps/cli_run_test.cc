@@ -189,6 +189,36 @@ TEST(Resume, CheckpointOfAnotherFieldWritesNothing) {
   EXPECT_FALSE(std::filesystem::exists(dir / "other"));
 }
 
+// Resuming a finished run trains nothing and says so; a stage added to the config trains on
+// from where the run ended.
+TEST(Resume, FinishedRunTrainsOnlyAnAddedStage) {
+  const auto dir = scratch_dir();
+  const std::string one_stage =
+      "  batch: {interior: 32, boundary: 16}\n  stages:\n    - {optimizer: adam, steps: 2, lr: 1.0e-3}\n";
+  write_text(dir / "small.yaml", poisson_config("{lower: [0, 0], upper: [1, 1]}", one_stage, "{grid: [5, 5]}"));
+  write_text(dir / "longer.yaml",
+             poisson_config("{lower: [0, 0], upper: [1, 1]}",
+                            one_stage + "    - {optimizer: adam, steps: 3, lr: 1.0e-4}\n", "{grid: [5, 5]}"));
+  Outcome o = run_nfield({"run", (dir / "small.yaml").string(), "--out", (dir / "small").string()}, dir,
+                         dir / "capture");
+  ASSERT_EQ(o.code, 0) << describe(o);
+  const std::string checkpoint = (dir / "small/checkpoint.h5").string();
+
+  o = run_nfield({"run", (dir / "small.yaml").string(), "--resume", checkpoint, "--out", (dir / "again").string()},
+                 dir, dir / "capture");
+  ASSERT_EQ(o.code, 0) << describe(o);
+  EXPECT_NE(o.out.find("nothing is trained"), std::string::npos) << o.out;
+  EXPECT_EQ(read_json(dir / "again/metrics.json")["steps"], 2);
+
+  o = run_nfield({"run", (dir / "longer.yaml").string(), "--resume", checkpoint, "--out", (dir / "longer").string()},
+                 dir, dir / "capture");
+  ASSERT_EQ(o.code, 0) << describe(o);
+  EXPECT_EQ(o.out.find("nothing is trained"), std::string::npos) << o.out;
+  const nlohmann::json metrics = read_json(dir / "longer/metrics.json");
+  EXPECT_EQ(metrics["steps"], 5);
+  EXPECT_EQ(metrics["finished"], true);
+}
+
 // ---- outputs, value by value ----------------------------------------------------------
 
 // A box other than the unit square and a grid of unequal counts, so that mixing up the
