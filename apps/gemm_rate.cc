@@ -5,9 +5,9 @@
 #include <omp.h>
 
 #include <algorithm>
-#include <array>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 
 namespace nfield::apps {
 
@@ -89,44 +89,41 @@ namespace {
 // 8 in flight are enough) and fit in the 16 or 32 vector registers with the two constants.
 constexpr int kChains = 12;
 
-#if defined(__AVX512F__)
-constexpr int kLanes = 16;
-float fma_chains(long iterations) {
-  __m512 acc[kChains];
-  for (int c = 0; c < kChains; ++c) acc[c] = _mm512_set1_ps(static_cast<float>(c));
-  const __m512 m = _mm512_set1_ps(0.999999f), b = _mm512_set1_ps(1e-7f);
+// One vector type V with its set1 and fma: the chains run in registers, then sum to a float
+// that the caller keeps (so no chain is optimised away).
+template <class V, int Lanes, class Set1, class Fma>
+float fma_chains(long iterations, Set1 set1, Fma fma) {
+  V acc[kChains];
+  for (int c = 0; c < kChains; ++c) acc[c] = set1(static_cast<float>(c));
+  const V m = set1(0.999999f), b = set1(1e-7f);
   for (long i = 0; i < iterations; ++i)
-    for (int c = 0; c < kChains; ++c) acc[c] = _mm512_fmadd_ps(acc[c], m, b);
-  float sum = 0;
-  for (int c = 0; c < kChains; ++c) sum += _mm512_reduce_add_ps(acc[c]);
-  return sum;
-}
-#elif defined(__AVX2__) && defined(__FMA__)
-constexpr int kLanes = 8;
-float fma_chains(long iterations) {
-  __m256 acc[kChains];
-  for (int c = 0; c < kChains; ++c) acc[c] = _mm256_set1_ps(static_cast<float>(c));
-  const __m256 m = _mm256_set1_ps(0.999999f), b = _mm256_set1_ps(1e-7f);
-  for (long i = 0; i < iterations; ++i)
-    for (int c = 0; c < kChains; ++c) acc[c] = _mm256_fmadd_ps(acc[c], m, b);
-  alignas(32) float lanes[8];
+    for (int c = 0; c < kChains; ++c) acc[c] = fma(acc[c], m, b);
+  alignas(64) float lanes[Lanes];
   float sum = 0;
   for (int c = 0; c < kChains; ++c) {
-    _mm256_store_ps(lanes, acc[c]);
+    std::memcpy(lanes, &acc[c], sizeof lanes);
     for (float v : lanes) sum += v;
   }
   return sum;
 }
+
+#if defined(__AVX512F__)
+constexpr int kLanes = 16;
+float fma_chains(long iterations) {
+  return fma_chains<__m512, kLanes>(iterations, [](float v) { return _mm512_set1_ps(v); },
+                                    [](__m512 a, __m512 m, __m512 b) { return _mm512_fmadd_ps(a, m, b); });
+}
+#elif defined(__AVX2__) && defined(__FMA__)
+constexpr int kLanes = 8;
+float fma_chains(long iterations) {
+  return fma_chains<__m256, kLanes>(iterations, [](float v) { return _mm256_set1_ps(v); },
+                                    [](__m256 a, __m256 m, __m256 b) { return _mm256_fmadd_ps(a, m, b); });
+}
 #else
 constexpr int kLanes = 1;
 float fma_chains(long iterations) {
-  float acc[kChains];
-  for (int c = 0; c < kChains; ++c) acc[c] = static_cast<float>(c);
-  for (long i = 0; i < iterations; ++i)
-    for (int c = 0; c < kChains; ++c) acc[c] = std::fma(acc[c], 0.999999f, 1e-7f);
-  float sum = 0;
-  for (float v : acc) sum += v;
-  return sum;
+  return fma_chains<float, kLanes>(iterations, [](float v) { return v; },
+                                   [](float a, float m, float b) { return std::fma(a, m, b); });
 }
 #endif
 
