@@ -155,6 +155,108 @@ TEST(PoissonImage, FluxTermUsesTheOutwardNormal) {
   }
 }
 
+// laplacian_loss: energy has one term, ∇u − q with q of divergence Δs (the Laplacian
+// form's target) in field coordinates (y up: a sign error in q_y would flip half of it).
+TEST(PoissonImage, EnergyTargetHasTheLaplacianTargetAsDivergence) {
+  const RunSetup energy_setup = load_run(smooth_config("laplacian\n  laplacian_loss: energy"), {});
+  const std::vector<LossTerm> terms = energy_setup.problem->loss_terms();
+  ASSERT_EQ(terms.size(), 1u);
+  EXPECT_EQ(terms[0].name, "energy");
+  const RunSetup residual_setup = load_run(smooth_config("laplacian\n  laplacian_loss: residual"), {});
+  const LossTerm laplacian = residual_setup.problem->loss_terms().at(0);
+  EXPECT_EQ(laplacian.name, "laplacian");
+  Random rng(3);
+  const Eigen::MatrixXd x = 0.95 * terms[0].sample(rng, 200).x;
+  const double h = 1e-5;
+  const Eigen::MatrixXd e = Eigen::RowVector2d(h, 0).replicate(x.rows(), 1);
+  const Eigen::MatrixXd n = Eigen::RowVector2d(0, h).replicate(x.rows(), 1);
+  const Eigen::VectorXd div = (targets(terms[0], x + e).col(0) - targets(terms[0], x - e).col(0) +
+                               targets(terms[0], x + n).col(1) - targets(terms[0], x - n).col(1)) / (2 * h);
+  const Eigen::VectorXd g = targets(laplacian, x).col(0);
+  std::printf("divergence of q against the Laplacian: worst %.2e (values up to %.2f)\n",
+              (div - g).cwiseAbs().maxCoeff(), g.cwiseAbs().maxCoeff());
+  EXPECT_LT((div - g).cwiseAbs().maxCoeff(), 1e-5 * g.cwiseAbs().maxCoeff());
+}
+
+// stream_function: true gives the field a second output ψ: the energy residual is
+// ∇u + (∂ψ/∂y, −∂ψ/∂x) − q, and a term `stream` holds ψ to zero on the border.
+TEST(PoissonImage, StreamFunctionAddsTheRotatedGradientOfASecondOutput) {
+  const RunSetup setup = load_run(smooth_config("laplacian\n  laplacian_loss: energy\n  stream_function: true"), {});
+  EXPECT_EQ(setup.problem->output_dim(), 2);
+  EXPECT_EQ(setup.problem->output_names(), (std::vector<std::string>{"u", "psi"}));
+  const std::vector<LossTerm> terms = setup.problem->loss_terms();
+  ASSERT_EQ(terms.size(), 2u);
+  EXPECT_EQ(terms[0].name, "energy");
+  EXPECT_EQ(terms[1].name, "stream");
+  EXPECT_EQ(terms[1].batch_key, "boundary");
+  Random rng(4);
+  const Eigen::MatrixXd x = terms[0].sample(rng, 50).x;
+  // Residual rows of a zero field (two channels): minus the targets q.
+  const autodiff::StreamLayout layout(terms[0].spec);
+  autodiff::Streams<double> out;
+  out.points = x.rows();
+  out.count = layout.count();
+  out.data = Eigen::MatrixXd::Zero(x.rows() * out.count, 2);
+  Eigen::MatrixXd q;
+  terms[0].residual(x)->evaluate(0, layout, out, q);
+  q = -q;
+  EXPECT_GT(q.cwiseAbs().maxCoeff(), 0.01);
+  // u's gradient (1, 2) and ψ's (3, 5).
+  out.data.middleRows(layout.tangent(0) * x.rows(), x.rows()).rowwise() = Eigen::RowVector2d(1, 3);
+  out.data.middleRows(layout.tangent(1) * x.rows(), x.rows()).rowwise() = Eigen::RowVector2d(2, 5);
+  Eigen::MatrixXd r;
+  terms[0].residual(x)->evaluate(0, layout, out, r);
+  ASSERT_EQ(r.cols(), 2);
+  for (Eigen::Index i = 0; i < x.rows(); ++i) {
+    EXPECT_NEAR(r(i, 0), 1 + 5 - q(i, 0), 1e-12);
+    EXPECT_NEAR(r(i, 1), 2 - 3 - q(i, 1), 1e-12);
+  }
+  const Eigen::MatrixXd b = terms[1].sample(rng, 40).x;
+  EXPECT_DOUBLE_EQ(b.cwiseAbs().rowwise().maxCoeff().minCoeff(), 1.0);  // on the border
+  const autodiff::StreamLayout values(terms[1].spec);
+  autodiff::Streams<double> at_border;
+  at_border.points = b.rows();
+  at_border.count = values.count();
+  at_border.data = Eigen::MatrixXd::Zero(b.rows() * at_border.count, 2);
+  at_border.data.topRows(b.rows()).rowwise() = Eigen::RowVector2d(0.25, 0.75);
+  terms[1].residual(b)->evaluate(0, values, at_border, r);
+  ASSERT_EQ(r.cols(), 1);
+  EXPECT_TRUE(r.isConstant(0.75));
+}
+
+// camera.png at 64²: the same field (cubic levels, which the strong form needs) and the same
+// 200 Adam steps from the Laplacian, in the energy form with the stream function and in the
+// strong form with its flux term. The strong form weighs an error of frequency ω by ω⁴ and
+// leaves the smooth shading wrong; the energy weighs it by ω².
+TEST(PoissonImage, EnergyFormReachesWhatTheResidualFormDoesNot) {
+  const auto psnr_of = [](const std::string& loss) {
+    const fs::path config = write_config("poisson_image_" + loss.substr(0, 6), R"yaml(
+problem: poisson_image
+equation: {image: )yaml" + kCamera.string() + R"yaml(, supervise: laplacian, laplacian_loss: )yaml" + loss +
+                                                                   R"yaml(, downsample: 8}
+field:
+  type: mlp
+  activation: relu
+  hidden: [16]
+  encoding: {type: hash_grid, levels: 6, features_per_level: 2, log2_table_size: 12, base_resolution: 4, finest_resolution: 64, interpolation: cubic}
+training:
+  batch: {interior: 2048, boundary: 256}
+  stages: [{optimizer: adam, steps: 200, lr: 1.0e-2, schedule: cosine, lr_final: 1.0e-4}]
+output: {grid: [8, 8]}
+)yaml");
+    const fs::path out = config.parent_path() / "out";
+    RunSetup setup = load_run(config, {}, out);
+    EXPECT_EQ(execute_run(setup, {}), 0);
+    std::ifstream in(out / "metrics.json");
+    const double psnr = nlohmann::json::parse(in)["psnr_db"].get<double>();
+    std::printf("laplacian_loss %s: PSNR %.2f dB\n", loss.c_str(), psnr);
+    return psnr;
+  };
+  const double energy = psnr_of("energy, stream_function: true"), residual = psnr_of("residual");
+  EXPECT_GT(energy, 25.0);
+  EXPECT_LT(residual, 20.0);
+}
+
 // ~2 s: camera.png averaged down by 8 (64 × 64) from its gradient only.
 TEST(PoissonImage, ShortFitFromTheGradientIsFarAboveTheBestConstant) {
   const fs::path config = write_config("poisson_image", R"yaml(
@@ -196,6 +298,17 @@ TEST(PoissonImage, BadKeysAreLocated) {
   expect_located_error(small, {6, 15, "equation.downsample", "fewer than 3 pixels of the 96 x 80 image"});
   expect_located_error(bad_config("  flux_weight: -1\n"), {4, 16, "equation.flux_weight", ""});
   expect_located_error(bad_config("  zoom: 2\n"), {4, 3, "equation.zoom", "unknown key 'zoom'"});
+  expect_located_error(bad_config("  supervise: laplacian\n  laplacian_loss: weak\n"),
+                       {5, 19, "equation.laplacian_loss", "residual, energy"});
+  expect_located_error(bad_config("  laplacian_loss: energy\n"), {4, 19, "equation.laplacian_loss", "supervise: laplacian only"});
+  expect_located_error(bad_config("  supervise: laplacian\n  derivatives: central_differences\n  laplacian_loss: energy\n"),
+                       {6, 19, "equation.laplacian_loss", "needs derivatives: spline"});
+  expect_located_error(bad_config("  supervise: laplacian\n  laplacian_loss: energy\n  flux_weight: 10\n"),
+                       {6, 16, "equation.flux_weight", "laplacian_loss: residual only"});
+  expect_located_error(bad_config("  supervise: laplacian\n  stream_function: true\n"),
+                       {5, 20, "equation.stream_function", "laplacian_loss: energy only"});
+  expect_located_error(bad_config("  supervise: laplacian\n  laplacian_loss: energy\n  stream_weight: 2\n"),
+                       {6, 18, "equation.stream_weight", "stream_function: true only"});
   const fs::path thin = smooth_config("gradient");
   write_smooth_picture(thin.parent_path() / "smooth.png", 40, 2);
   expect_located_error(thin, {4, 10, "equation.image", "40 x 2 pixels"});
