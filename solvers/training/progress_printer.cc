@@ -107,10 +107,13 @@ void ProgressPrinter::print_step(const Progress& p) {
     std::snprintf(buffer, sizeof buffer, " | %s %.3g", name.c_str(), value);
     terms += buffer;
   }
-  std::fprintf(options_.out, "%sstep %ld/%ld [%s] loss %.3e |%s | %s, ETA %s%s",
+  std::string later;
+  if (p.later_stages > 0)
+    later = " (this stage; " + std::to_string(p.later_stages) + " more stage" + (p.later_stages > 1 ? "s" : "") + " after)";
+  std::fprintf(options_.out, "%sstep %ld/%ld [%s] loss %.3e |%s | %s, ETA %s%s%s",
                tty_ ? "\r\033[K" : "", p.step, p.total_steps, p.optimizer.c_str(), p.loss,
                terms.c_str(), rate_text(p.steps_per_second).c_str(),
-               duration_text(p.eta_seconds).c_str(), tty_ ? "" : "\n");
+               duration_text(p.eta_seconds).c_str(), later.c_str(), tty_ ? "" : "\n");
   std::fflush(options_.out);
   open_line_ = tty_;
 }

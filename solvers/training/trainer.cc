@@ -262,15 +262,10 @@ Progress Trainer<Scalar>::progress(double lr) const {
   const double elapsed = now_seconds() - stage_started_;
   const long done = global_step_ - stage_started_step_;
   p.steps_per_second = elapsed > 0 ? done / elapsed : 0;
-  p.eta_seconds = p.steps_per_second > 0 ? (p.total_steps - p.step) / p.steps_per_second : 0;
-  if (time_budget_ > 0) {
-    // A time budget ends the stage first when it is shorter than its steps would take.
-    const double left = std::max(0.0, time_budget_ - elapsed);
-    const double later = p.steps_per_second > 0
-                             ? (p.total_steps - (p.step - stage_step_ + stage.steps)) / p.steps_per_second
-                             : 0;
-    p.eta_seconds = std::min(p.eta_seconds, left + std::max(0.0, later));
-  }
+  p.eta_seconds = p.steps_per_second > 0 ? (stage.steps - stage_step_) / p.steps_per_second : 0;
+  // A time budget ends the stage first when it is shorter than its steps would take.
+  if (time_budget_ > 0) p.eta_seconds = std::min(p.eta_seconds, std::max(0.0, time_budget_ - elapsed));
+  p.later_stages = static_cast<int>(options_.stages.size()) - 1 - stage_;
   return p;
 }
 

@@ -63,7 +63,11 @@ struct Progress {
   std::vector<std::string> term_names;
   std::vector<double> term_losses;
   double steps_per_second = 0;  // over the current stage so far
-  double eta_seconds = 0;       // the remaining steps of all stages at that rate
+  // The current stage's remaining steps at that rate (or its time budget, if sooner). Later
+  // stages are not in it: their optimizers' rates are unknown until they run, and one
+  // stage's rate says nothing about another's (an LM step can take 200 L-BFGS steps' time).
+  double eta_seconds = 0;
+  int later_stages = 0;  // stages after the current one
   std::vector<std::pair<std::string, double>> extras;  // e.g. the minimum causal weight
 };
 

@@ -116,6 +116,29 @@ TEST(OptimizerRegistry, OptimizerFromOutsideTrainsThroughAConfig) {
   EXPECT_EQ(trainer.stage_losses()[0], last_loss);
 }
 
+// The ETA of a progress line is the current stage's: its steps left at its rate. Later
+// stages run other optimizers at other rates (an LM step can cost hundreds of L-BFGS steps),
+// so they are counted, not timed.
+TEST(TrainerProgress, EtaCoversTheCurrentStageAndCountsTheLaterOnes) {
+  const RunSetup setup = load_run(write_config(poisson_config("    - {optimizer: adam, steps: 30, lr: 1.0e-3}\n"
+                                                              "    - {optimizer: lbfgs, steps: 10}\n")),
+                                  {});
+  fields::Field<double> field(setup.field);
+  Trainer<double> trainer(*setup.problem, field, setup.training);
+  long checked = 0;
+  Trainer<double>::Callbacks callbacks;
+  callbacks.progress = [&](const Progress& p) {
+    const long stage_end = p.stage == 0 ? 30 : 40;
+    EXPECT_EQ(p.later_stages, p.stage == 0 ? 1 : 0) << "step " << p.step;
+    if (p.steps_per_second <= 0) return;
+    EXPECT_NEAR(p.eta_seconds * p.steps_per_second, static_cast<double>(stage_end - p.step), 1e-9 * stage_end)
+        << "step " << p.step;
+    ++checked;
+  };
+  ASSERT_TRUE(trainer.run(callbacks));
+  EXPECT_GT(checked, 20);
+}
+
 TEST(OptimizerRegistry, OutsideOptimizerKeysAreReadStrictly) {
   register_descent();
   // Line 15 is the stage; column 53 the value of rate, column 47 the unknown key.

@@ -81,6 +81,26 @@ TEST(ProgressPrinter, SlowStepsPrintByTimeAndFastOnesEveryLogEvery) {
   std::fclose(f);
 }
 
+TEST(ProgressPrinter, SaysWhenLaterStagesAreNotInTheEta) {
+  std::FILE* f = std::tmpfile();
+  ASSERT_NE(f, nullptr);
+  {
+    ProgressPrinter printer({.log_every = 1, .interval = 5, .out = f, .terminal = false});
+    Progress p = lm_progress(500);
+    p.later_stages = 2;
+    printer.step(p);
+    p = lm_progress(501);
+    p.later_stages = 1;
+    printer.step(p);
+    printer.step(lm_progress(502));
+  }
+  const std::string text = contents(f);
+  EXPECT_EQ(count(text, "(this stage; 2 more stages after)"), 1) << text;
+  EXPECT_EQ(count(text, "(this stage; 1 more stage after)"), 1) << text;
+  EXPECT_EQ(count(text, "this stage"), 2) << text;  // the last stage's line has no note
+  std::fclose(f);
+}
+
 TEST(ProgressPrinter, RejectsABadInterval) {
   EXPECT_THROW(ProgressPrinter({.interval = 0}), std::invalid_argument);
   EXPECT_THROW(ProgressPrinter({.log_every = 0}), std::invalid_argument);
