@@ -20,6 +20,12 @@ namespace {
 Domain scene_domain(const io::ConfigNode& scene) {
   const std::vector<double> lower = scene.get_list<double>("lower", 3), upper = scene.get_list<double>("upper", 3);
   for (int a = 0; a < 3; ++a) scene.require("upper", upper[a] > lower[a], "expected upper > lower on every axis");
+  // Step lengths, frustum radii and the occupancy grid's cells all come from the diagonal: a
+  // box of +-1e300 passes the check above yet has an infinite diagonal.
+  double diagonal_squared = 0;
+  for (int a = 0; a < 3; ++a) diagonal_squared += (upper[a] - lower[a]) * (upper[a] - lower[a]);
+  scene.require("upper", std::isfinite(diagonal_squared),
+                "expected a box whose diagonal is a finite number (upper - lower overflows)");
   return Domain(lower, upper);
 }
 

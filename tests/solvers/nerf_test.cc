@@ -278,6 +278,12 @@ TEST(Nerf, ConfigErrorsAreLocated) {
   std::string flat = nerf_config(bunny_data());
   flat.replace(flat.find("upper: [0.6, 0.6, 0.6]"), 22, "upper: [0.6, -0.6, 0.6]");
   check(flat, {4, 43, "scene.upper", "upper > lower"});
+  // A box of +-1e300 has upper > lower yet an infinite diagonal; the mip-NeRF frustums then
+  // failed with a NaN deep inside the problem instead of a located error.
+  std::string huge = nerf_config(bunny_data());
+  huge.replace(huge.find("upper: [0.6, 0.6, 0.6]"), 22, "upper: [0.6, 0.6, 1e300]");
+  huge.replace(huge.find("lower: [-0.6, -0.6, -0.6]"), 25, "lower: [-0.6, -0.6, -1e300]");
+  check(huge, {4, 45, "scene.upper", "diagonal is a finite number"});
 }
 
 }  // namespace
