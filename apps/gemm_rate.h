@@ -26,9 +26,10 @@ double gemm_flops(const std::vector<GemmShape>& shapes, Eigen::Index rows);
 double gemm_gflops(const std::vector<GemmShape>& shapes, Eigen::Index rows, int repeats);
 
 // GFLOP/s of independent float fused multiply-adds in registers on `threads` threads (the
-// widest vectors the build targets: AVX-512, else AVX2 + FMA, else scalar std::fma), median of
-// `repeats` timings: the machine's arithmetic ceiling, which no product of any library can
-// pass. A training step's products over this is the share of the chip that the step uses,
+// widest vectors the build targets: AVX-512, else AVX2 + FMA, else scalar std::fma), the best
+// of `repeats` timings: the machine's arithmetic ceiling, which no product of any library can
+// pass. The best, not the median, because a ceiling is what the chip can do: a timing that
+// shared its cores with another process (a parallel test run) only shows less. A training step's products over this is the share of the chip that the step uses,
 // whatever the BLAS, so it bounds what any implementation of the same step can reach.
 double fma_peak_gflops(int threads, int repeats);
 
