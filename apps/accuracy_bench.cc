@@ -107,12 +107,13 @@ int run_accuracy_bench(const AccuracyOptions& options) {
     const int code = solvers::execute_run(setups[k]);
     std::ifstream file(setups[k].output.dir / "metrics.json");
     rows.push_back({selected[k], nlohmann::json::parse(file)});
-    if (code != 0) return code;
+    // A case that diverged misses its target (below); an interrupt ends the table.
+    if (code != 0 && code != solvers::kExitDiverged) return code;
   }
 
   std::printf("\n%-16s %-26s %10s %10s %8s %8s  %s\n", "case", "figure", "target", "value", "wall s", "met",
               "rel_l2 after each stage");
-  std::vector<std::string> lines;
+  std::vector<std::string> lines, missed;
   for (const Row& row : rows) {
     const nlohmann::json& m = row.metrics;
     const double wall = m["wall_s"].get<double>();
@@ -129,10 +130,14 @@ int run_accuracy_bench(const AccuracyOptions& options) {
     }
     const AccuracyCriterion& first = row.target.criteria.front();
     const double value = metric(m, first.metric);
-    const bool met = accurate && wall <= row.target.target_wall_s;
+    const bool finished = m.value("finished", false);
+    const bool met = finished && accurate && wall <= row.target.target_wall_s;
+    if (!met)
+      missed.push_back(row.target.name + (!finished ? " (" + m.value("stopped", std::string("not finished")) + ")"
+                                          : accurate ? " (slow)" : ""));
     std::printf("%-16s %-26s %10.3g %10.3g %8.1f %8s  %s\n", row.target.name.c_str(),
                 (first.metric + (first.at_least ? " >=" : " <=")).c_str(), first.target, value, wall,
-                met ? "yes" : (accurate ? "slow" : "no"), stage_summary(m["stages"]).c_str());
+                met ? "yes" : !finished ? "stopped" : (accurate ? "slow" : "no"), stage_summary(m["stages"]).c_str());
     for (size_t k = 1; k < row.target.criteria.size(); ++k) {
       const AccuracyCriterion& c = row.target.criteria[k];
       const double v = metric(m, c.metric);
@@ -154,7 +159,14 @@ int run_accuracy_bench(const AccuracyOptions& options) {
     lines.push_back(line.dump());
   }
   for (const std::string& line : lines) std::puts(line.c_str());
-  return 0;
+  if (missed.empty()) {
+    std::printf("all %zu cases met their targets\n", rows.size());
+    return 0;
+  }
+  std::string names;
+  for (const std::string& name : missed) names += (names.empty() ? "" : ", ") + name;
+  std::printf("%zu of %zu cases missed their targets: %s\n", missed.size(), rows.size(), names.c_str());
+  return options.fail_on_miss ? kExitTargetsMissed : 0;
 }
 
 }  // namespace nfield::apps

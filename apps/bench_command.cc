@@ -219,6 +219,10 @@ void add_bench_command(CLI::App& app) {
       ->capture_default_str();
   bench->add_option("--out", accuracy->out, "--accuracy: output folder, one subfolder per case")
       ->capture_default_str();
+  auto no_fail = std::make_shared<bool>(false);
+  bench->add_flag("--no-fail", *no_fail,
+                  "--accuracy: exit 0 even when a case misses its target (default: exit code 4, after a "
+                  "line naming the cases that missed)");
   bench->add_option("--set", accuracy->overrides,
                     "--accuracy, --nerf, --autoint: override a value in every case's config, in the --nerf "
                     "config, or in every --autoint run's config");
@@ -280,7 +284,7 @@ void add_bench_command(CLI::App& app) {
   auto autoint_out = std::make_shared<std::filesystem::path>(autoint->out);
   bench->add_option("--autoint-out", *autoint_out, "--autoint: output folder, one subfolder per run")
       ->capture_default_str();
-  bench->callback([bench, options, accuracy, accuracy_flag, nerf, nerf_flag, autoint, autoint_flag, no_grid,
+  bench->callback([bench, options, accuracy, accuracy_flag, no_fail, nerf, nerf_flag, autoint, autoint_flag, no_grid,
                    autoint_out] {
     if (*autoint_flag) {
       autoint->with_grid = !*no_grid;
@@ -300,6 +304,7 @@ void add_bench_command(CLI::App& app) {
       return run_nerf_bench(*nerf);
     }
     if (!*accuracy_flag) return run_bench(*options);
+    accuracy->fail_on_miss = !*no_fail;
     const int code = run_accuracy_bench(*accuracy);
     if (code != 0) throw CLI::RuntimeError(code);
   });
