@@ -16,6 +16,7 @@ struct RunArguments {
   std::vector<std::string> overrides;
   std::string out;
   std::string resume;
+  std::string progress = "auto";
 };
 
 struct RenderArguments {
@@ -55,8 +56,15 @@ void add_run_commands(CLI::App& app) {
   run_command->add_option("--resume", run->resume, "Continue from a checkpoint written by an earlier run")
       ->check(CLI::ExistingFile)
       ->check(kCheckpointFile);
+  run_command
+      ->add_option("--progress", run->progress,
+                   "Progress lines: live (one line redrawn in place), plain (one line each, for logs), "
+                   "or auto (live on a terminal, plain otherwise and under mpirun)")
+      ->check(CLI::IsMember({"auto", "live", "plain"}))
+      ->capture_default_str();
   run_command->callback([run] {
     solvers::RunSetup setup = solvers::load_run(run->config, run->overrides, run->out);
+    if (run->progress != "auto") setup.live_progress = run->progress == "live";
     const int code = solvers::execute_run(setup, run->resume);
     if (code != 0) throw CLI::RuntimeError(code);
   });

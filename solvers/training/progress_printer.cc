@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: MIT
 #include "solvers/training/progress_printer.h"
 
+#include <cstdlib>
+
 #include <unistd.h>
 
 #include <stdexcept>
@@ -31,6 +33,14 @@ std::string duration_text(double seconds) {
   return buffer;
 }
 
+// OpenMPI's mpirun (OMPI_COMM_WORLD_SIZE), MPICH's and Intel's (PMI_SIZE) and PMIx launchers
+// such as srun (PMIX_RANK) set these in every rank's environment.
+bool started_by_mpi_launcher() {
+  for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_RANK"})
+    if (std::getenv(name)) return true;
+  return false;
+}
+
 }  // namespace
 
 ProgressPrinter::ProgressPrinter(ProgressPrinterOptions options) : options_(options) {
@@ -40,7 +50,8 @@ ProgressPrinter::ProgressPrinter(ProgressPrinterOptions options) : options_(opti
   if (!(options_.interval > 0))
     throw std::invalid_argument("ProgressPrinterOptions.interval = " +
                                 std::to_string(options_.interval) + ": must be > 0");
-  tty_ = options_.terminal ? *options_.terminal : isatty(fileno(options_.out)) != 0;
+  tty_ = options_.terminal ? *options_.terminal
+                           : isatty(fileno(options_.out)) != 0 && !started_by_mpi_launcher();
   shown_ = step_started_ = Clock::now();
   watchdog_ = std::thread([this] { watch(); });
 }
@@ -53,6 +64,14 @@ ProgressPrinter::~ProgressPrinter() {
   wake_.notify_all();
   watchdog_.join();
   finish();
+}
+
+void ProgressPrinter::notice(const std::string& line) {
+  const std::lock_guard lock(mutex_);
+  std::fprintf(options_.out, "%s%s\n", open_line_ ? "\n" : "", line.c_str());
+  std::fflush(options_.out);
+  open_line_ = false;
+  shown_ = Clock::now();
 }
 
 void ProgressPrinter::finish() {

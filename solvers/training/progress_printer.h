@@ -16,6 +16,7 @@
 #include <cstdio>
 #include <mutex>
 #include <optional>
+#include <string>
 #include <thread>
 
 #include "solvers/training/trainer.h"
@@ -26,7 +27,10 @@ struct ProgressPrinterOptions {
   int log_every = 100;       // steps between lines when the output is not a terminal
   double interval = 5.0;     // seconds: the longest silence, in and between steps; > 0
   std::FILE* out = stdout;   // not owned
-  std::optional<bool> terminal;  // unset: whether `out` is a terminal
+  // Lines redrawn in place (true) or one per line (false); unset: redrawn when `out` is a
+  // terminal and the process was not started by an MPI launcher (mpirun hands each rank a
+  // pseudo-terminal, and a log of its output would hold the redraws).
+  std::optional<bool> terminal;
 };
 
 class ProgressPrinter {
@@ -41,6 +45,9 @@ class ProgressPrinter {
   // A stage is starting; `p` holds the step counters and losses so far
   // (Trainer::Callbacks::stage_begins).
   void stage_begins(const Progress& p);
+  // A line of its own between the progress lines (Trainer::Callbacks::notice): why a stage
+  // ended early, a retry after a non-finite step.
+  void notice(const std::string& line);
   // Ends a line redrawn in place.
   void finish();
 

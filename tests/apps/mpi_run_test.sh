@@ -3,7 +3,8 @@
 # `nfield run` over 2 MPI ranks against one process (CTest mpi.run; NFIELD_MPI builds):
 # the same short Poisson run (Adam, then L-BFGS) ends at the same error, only rank 0 prints
 # and writes, the 2-rank checkpoint is refused by one process with a message naming the
-# rank count, and resumes over 2 ranks.
+# rank count, and resumes over 2 ranks. The log of the 2-rank run (mpirun hands each rank a
+# pseudo-terminal) holds plain progress lines: no carriage return, no terminal escape.
 # Usage: mpi_run_test.sh NFIELD CONFIG SCRATCH MPIEXEC [FLAGS...]  (the launcher up to -np)
 set -euo pipefail
 nfield=$1 config=$2 scratch=$3
@@ -23,6 +24,12 @@ if [[ $(grep -c '^wrote ' "$scratch/two.log") -ne 1 ]]; then
   exit 1
 fi
 
+if grep -q $'[\r\x1b]' "$scratch/two.log"; then
+  echo "FAIL: the 2-rank log holds carriage returns or terminal escapes:"
+  od -c "$scratch/two.log" | head -20
+  exit 1
+fi
+
 python3 - "$scratch" <<'PYEOF'
 import json, sys
 scratch = sys.argv[1]
@@ -31,7 +38,10 @@ two = json.load(open(f"{scratch}/two/metrics.json"))
 assert "mpi_ranks" not in one, "a single process reports no ranks"
 assert two["mpi_ranks"] == 2, two.get("mpi_ranks")
 assert one["finished"] and two["finished"]
-assert one["steps"] == two["steps"] == 300, (one["steps"], two["steps"])
+# Steps actually taken: 200 Adam steps and up to 100 L-BFGS iterations (fewer if its line
+# search finds no decrease), the same over 2 ranks.
+assert one["steps"] == two["steps"] <= 300, (one["steps"], two["steps"])
+assert [s["iterations"] for s in one["stages"]] == [s["iterations"] for s in two["stages"]]
 a, b = one["rel_l2"], two["rel_l2"]
 # The 2-rank gradient is the single process's up to the order of its sums (1e-15 relative,
 # data_parallel_test); 300 steps of Adam and L-BFGS carry it into the parameters, where it

@@ -6,6 +6,10 @@
 
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
+#include <stdlib.h>
+#include <unistd.h>
+
 #include <chrono>
 #include <cstdio>
 #include <string>
@@ -41,6 +45,62 @@ Progress lm_progress(long step) {
   p.steps_per_second = 0.25;
   p.eta_seconds = 4 * (1000 - step);
   return p;
+}
+
+// What the printer writes to a pseudo-terminal, with the process's environment as it is.
+std::string printed_on_a_terminal() {
+  const int master = posix_openpt(O_RDWR | O_NOCTTY);
+  EXPECT_GE(master, 0);
+  EXPECT_EQ(grantpt(master), 0);
+  EXPECT_EQ(unlockpt(master), 0);
+  std::FILE* terminal = std::fopen(ptsname(master), "w");
+  EXPECT_NE(terminal, nullptr);
+  {
+    ProgressPrinter printer({.log_every = 1, .interval = 5, .out = terminal});
+    Progress last = lm_progress(1);
+    last.total_steps = 1;  // a terminal's line is redrawn at most every 100 ms, and at the last step
+    printer.step(last);
+    printer.notice("stage 2 (lm) ended after 1 of 1000 iterations: converged");
+  }
+  std::fclose(terminal);
+  std::string text;
+  char buffer[512];
+  fcntl(master, F_SETFL, O_NONBLOCK);
+  for (ssize_t n; (n = read(master, buffer, sizeof buffer)) > 0;) text.append(buffer, static_cast<size_t>(n));
+  close(master);
+  return text;
+}
+
+// A terminal gets the line redrawn in place; the same terminal under mpirun (which gives each
+// rank a pseudo-terminal, so a log of it would hold the escapes) gets plain lines.
+TEST(ProgressPrinter, PlainLinesUnderAnMpiLauncher) {
+  unsetenv("OMPI_COMM_WORLD_SIZE");
+  unsetenv("PMI_SIZE");
+  unsetenv("PMIX_RANK");
+  const std::string live = printed_on_a_terminal();
+  EXPECT_NE(live.find("\033[K"), std::string::npos) << live;
+  setenv("OMPI_COMM_WORLD_SIZE", "2", 1);
+  const std::string plain = printed_on_a_terminal();
+  unsetenv("OMPI_COMM_WORLD_SIZE");
+  EXPECT_EQ(plain.find('\033'), std::string::npos) << plain;
+  EXPECT_NE(plain.find("step 1/1 [lm]"), std::string::npos) << plain;
+  EXPECT_NE(plain.find("ended after 1 of 1000 iterations: converged"), std::string::npos) << plain;
+}
+
+// A notice ends a line redrawn in place and stands on a line of its own.
+TEST(ProgressPrinter, ANoticeStandsOnItsOwnLine) {
+  std::FILE* f = std::tmpfile();
+  ASSERT_NE(f, nullptr);
+  {
+    ProgressPrinter printer({.log_every = 1, .interval = 5, .out = f, .terminal = true});
+    Progress last = lm_progress(1);
+    last.total_steps = 1;
+    printer.step(last);
+    printer.notice("a notice");
+  }
+  const std::string text = contents(f);
+  EXPECT_NE(text.find("\na notice\n"), std::string::npos) << text;
+  std::fclose(f);
 }
 
 TEST(ProgressPrinter, ALongStepStillPrintsLines) {
