@@ -2,6 +2,7 @@
 //
 // The nfield command-line program: thin dispatch onto the library.
 // Exit codes: 0 done, 1 a failure while running, 2 bad input (config, arguments),
+// 3 diverged (a non-finite loss, gradient or update; the last finite state written),
 // 130 interrupted (outputs so far written).
 #include <CLI/CLI.hpp>
 #include <exception>

@@ -218,6 +218,9 @@ std::vector<std::string> overrides(const py::object& set) {
   return out;
 }
 
+// nfield.DivergedError (a RuntimeError), set when the module loads; kept for the module's life.
+PyObject* g_diverged_error = nullptr;
+
 // out and resume are optional: a default path would reach Python as Path("."), not as empty.
 py::object run(const std::filesystem::path& config, const py::object& set,
                const std::optional<std::filesystem::path>& out_dir,
@@ -247,6 +250,15 @@ py::object run(const std::filesystem::path& config, const py::object& set,
                      setup.output.dir.string()).c_str());
     throw py::error_already_set();
   }
+  if (code == solvers::kExitDiverged) {
+    // The run's record goes with the error: where it stopped and what was written.
+    const py::object error = py::reinterpret_borrow<py::object>(g_diverged_error)(
+        metrics["stopped"].cast<std::string>() + "; checkpoint and outputs of the last finite state written to " +
+        setup.output.dir.string());
+    error.attr("metrics") = metrics;
+    PyErr_SetObject(g_diverged_error, error.ptr());
+    throw py::error_already_set();
+  }
   return metrics;
 }
 
@@ -262,6 +274,12 @@ PYBIND11_MODULE(nfield, m) {
   m.attr("__version__") = std::string(version());
   py::register_exception<io::ConfigError>(m, "ConfigError", PyExc_ValueError);
   py::register_exception<io::H5Error>(m, "H5Error", PyExc_OSError);
+  g_diverged_error = PyErr_NewExceptionWithDoc(
+      "nfield.DivergedError",
+      "A run whose loss, gradient or update went non-finite (nfield run's exit code 3); its "
+      "`metrics` attribute holds metrics.json (finished: false, stopped, divergence).",
+      PyExc_RuntimeError, nullptr);
+  m.attr("DivergedError") = py::handle(g_diverged_error);
 
   // The lambdas return py::object: an item accessor of the temporary dict would outlive it.
   const auto values = [](const CheckpointField& f, const py::handle& x) -> py::object {
@@ -333,5 +351,6 @@ PYBIND11_MODULE(nfield, m) {
         py::arg("out") = py::none(), py::arg("resume") = py::none(),
         "Trains as `nfield run CONFIG --set ... --out OUT --resume CHECKPOINT` does, writes "
         "the outputs, and returns metrics.json as a dict. A bad config raises "
-        "nfield.ConfigError before anything is written.");
+        "nfield.ConfigError before anything is written; a run that diverges (a non-finite "
+        "step) raises nfield.DivergedError after writing its last finite state.");
 }

@@ -173,6 +173,7 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
     SignalGuard guard;
     ProgressPrinterOptions printing;
     printing.log_every = setup.training.log_every;
+    printing.terminal = setup.live_progress;
     ProgressPrinter printer(printing);
     typename Trainer<Scalar>::Callbacks callbacks;
     callbacks.stop_requested = [] { return g_signal.load() != 0; };
@@ -182,7 +183,7 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
       finished = trainer.run(callbacks);
       // Wait for rank 0's outputs: mpirun ends the whole job when one rank exits with 130.
       communicator.any(false);
-      return finished ? 0 : 130;
+      return finished ? 0 : trainer.divergence() ? kExitDiverged : 130;
     }
     // The problem's own progress figures, refreshed at most every 10 s (they may render).
     std::vector<std::pair<std::string, double>> problem_figures;
@@ -199,6 +200,7 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
       printer.step(shown);
     };
     callbacks.stage_begins = [&printer](const Progress& p) { printer.stage_begins(p); };
+    callbacks.notice = [&printer](const std::string& line) { printer.notice(line); };
     callbacks.stage_error = [&] {
       if (const std::optional<double> error = setup.problem->reported_error(context)) return *error;
       return setup.problem->has_exact() && setup.problem->writes_grid_outputs()
@@ -211,7 +213,11 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
     finished = trainer.run(callbacks);
   }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-  if (!finished) std::printf("\ninterrupted at step %ld: writing the checkpoint and outputs\n", trainer.step());
+  if (trainer.divergence())
+    std::printf("diverged: writing the checkpoint and outputs of the last finite parameters (step %ld)\n",
+                trainer.divergence()->last_finite_step);
+  else if (!finished)
+    std::printf("\ninterrupted at step %ld: writing the checkpoint and outputs\n", trainer.step());
   write_checkpoint(dir / "checkpoint.h5", field, trainer, *setup.problem, config_text, config_dir);
 
   const GridMetrics grid =
@@ -224,6 +230,17 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
   nlohmann::ordered_json metrics;
   metrics["problem"] = setup.root.get<std::string>("problem");
   metrics["finished"] = finished;
+  if (const auto& d = trainer.divergence()) {
+    metrics["stopped"] = "diverged: " + d->describe();
+    metrics["divergence"] = {{"step", d->step},
+                             {"stage", d->stage},
+                             {"optimizer", d->optimizer},
+                             {"what", d->what},
+                             {"last_finite_step", d->last_finite_step},
+                             {"last_finite_loss", d->last_finite_loss}};
+  } else if (!finished) {
+    metrics["stopped"] = "interrupted";
+  }
   metrics["steps"] = trainer.step();
   metrics["wall_s"] = wall;
   metrics["step_ms_median"] = median(trainer.step_milliseconds());
@@ -236,13 +253,20 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
   }
   metrics["loss"] = loss;
   metrics["stage_losses"] = trainer.stage_losses();
-  // Per finished stage: optimizer, final loss, rel_l2 (the problem's reported error, else the
-  // grid's), wall seconds.
+  // Per finished stage: optimizer, steps configured and taken and why it ended, final loss,
+  // rel_l2 (the problem's reported error, else the grid's), wall seconds.
   metrics["stages"] = nlohmann::ordered_json::array();
   for (size_t k = 0; k < trainer.stage_losses().size(); ++k) {
     nlohmann::ordered_json stage;
     stage["optimizer"] = setup.training.stages[k].optimizer;
     stage["steps"] = setup.training.stages[k].steps;
+    if (k < trainer.stage_ends().size()) {
+      const StageEnd& end = trainer.stage_ends()[k];
+      stage["iterations"] = end.iterations;
+      stage["ended"] = end.ended;
+      if (!end.termination.empty()) stage["termination"] = end.termination;
+      if (!end.message.empty()) stage["message"] = end.message;
+    }
     stage["loss"] = trainer.stage_losses()[k];
     if (k < trainer.stage_errors().size() && std::isfinite(trainer.stage_errors()[k]))
       stage["rel_l2"] = trainer.stage_errors()[k];
@@ -278,7 +302,7 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
   if (grid.has_error) std::printf(", rel_l2 %.3e, max_abs_err %.3e", grid.rel_l2, grid.max_abs_err);
   std::printf(")\n");
   if (communicator.size() > 1) communicator.any(false);  // the other ranks wait for this
-  return finished ? 0 : 130;
+  return finished ? 0 : trainer.divergence() ? kExitDiverged : 130;
 }
 
 // Stages whose optimizer cannot take the problem's size (an lm stage's dense Jacobian has

@@ -9,13 +9,15 @@
 //                    problems: solution.pvd over frames frame_KKKK.vti)
 //   solution.png     preview of u (2D, or the middle slice of 3D / the first frame)
 //   metrics.json     problem, steps, wall_s, step_ms_median, losses, rel_l2, max_abs_err, …
-//                    stages: [{optimizer, steps, loss, rel_l2, wall_s}] after each stage
+//                    stages: [{optimizer, steps, iterations, ended, termination, message,
+//                    loss, rel_l2, wall_s}] after each stage; finished, stopped, divergence
 //
 // The `output:` section: solvers/output_options.h.
 #pragma once
 
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -36,6 +38,9 @@ struct RunSetup {
   OutputOptions output{};
   YAML::Node resolved{};  // the config with defaults filled in
   std::filesystem::path data_dir{};  // relative data paths resolve here (the config's folder)
+  // Progress lines redrawn in place or one per line (ProgressPrinterOptions::terminal); unset:
+  // redrawn on a terminal outside mpirun (nfield run --progress).
+  std::optional<bool> live_progress{};
 };
 
 // Reads and checks a config (and `--set` overrides). Throws io::ConfigError. Relative data
@@ -49,8 +54,14 @@ RunSetup load_run(const std::filesystem::path& config, const std::vector<std::st
 // nothing; messages name the config as CHECKPOINT:config.
 RunSetup load_checkpoint_run(const io::H5Reader& file);
 
-// Trains and writes the outputs. Returns 0 when finished, 130 when interrupted by a signal
-// (outputs and checkpoint of the state reached are still written).
+// The exit code of a run whose loss, gradient or update went non-finite (training.on_divergence):
+// its checkpoint and outputs hold the last parameters whose loss was finite, and metrics.json
+// says where it stopped ("finished": false, "stopped", "divergence").
+inline constexpr int kExitDiverged = 3;
+
+// Trains and writes the outputs. Returns 0 when finished, 130 when interrupted by a signal,
+// kExitDiverged when a step went non-finite (outputs and checkpoint of the last finite state
+// reached are still written).
 int execute_run(RunSetup& setup, const std::filesystem::path& resume = {});
 
 // Samples a checkpoint's field onto a grid and writes VTK (nfield eval).

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <cstdio>
 
 #include "io/grid.h"
@@ -40,6 +41,10 @@ Eigen::MatrixXd frame_points(const Domain& domain, const Eigen::MatrixXd& space,
   return x;
 }
 
+// The larger of two errors, NaN when either is: a field that went non-finite somewhere must
+// not report the largest of its finite errors (std::max drops a NaN second argument).
+double max_or_nan(double a, double b) { return std::isnan(a) || std::isnan(b) ? std::numeric_limits<double>::quiet_NaN() : std::max(a, b); }
+
 // Sums of |u − u*|² and |u*|² over the points the problem's error mask keeps.
 struct ErrorSums {
   double error_sq = 0, exact_sq = 0, max_abs = 0;
@@ -49,13 +54,13 @@ struct ErrorSums {
       if (mask(i)) {
         error_sq += error.row(i).squaredNorm();
         exact_sq += exact.row(i).squaredNorm();
-        max_abs = std::max(max_abs, error.row(i).cwiseAbs().maxCoeff());
+        max_abs = max_or_nan(max_abs, error.row(i).cwiseAbs().maxCoeff<Eigen::PropagateNaN>());
       }
   }
   void merge(const ErrorSums& other) {
     error_sq += other.error_sq;
     exact_sq += other.exact_sq;
-    max_abs = std::max(max_abs, other.max_abs);
+    max_abs = max_or_nan(max_abs, other.max_abs);
   }
   double rel_l2() const { return exact_sq > 0 ? std::sqrt(error_sq / exact_sq) : std::sqrt(error_sq); }
 };

@@ -425,7 +425,7 @@ class Eikonal final : public Problem {
     const Eigen::VectorXd error = result.u - result.exact;
     const double norm = result.exact.norm();
     result.rel_l2 = norm > 0 ? error.norm() / norm : error.norm();
-    result.max_abs_err = error.cwiseAbs().maxCoeff();
+    result.max_abs_err = error.cwiseAbs().maxCoeff<Eigen::PropagateNaN>();
     return result;
   }
 

@@ -163,7 +163,7 @@ class Fit final : public Problem {
     const double low = signal_.kind == Kind::kAudio ? -1.0 : 0.0;
     fitted = fitted.cwiseMax(low).cwiseMin(1.0);
     const Eigen::MatrixXd error = fitted - target;
-    const double max_abs = error.cwiseAbs().maxCoeff();
+    const double max_abs = error.cwiseAbs().maxCoeff<Eigen::PropagateNaN>();
     metrics.emplace_back("max_abs_err", max_abs);
     if (signal_.kind == Kind::kAudio) {
       write_audio_outputs(context, fitted.col(0), metrics);

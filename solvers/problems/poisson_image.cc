@@ -248,7 +248,7 @@ class PoissonImage final : public Problem {
     const Eigen::MatrixXd error = reconstruction - pixels_;
     const double mse = error.squaredNorm() / pixels_.size();
     metrics.emplace_back("psnr_db", 10.0 * std::log10(1.0 / mse));
-    metrics.emplace_back("max_abs_err", error.cwiseAbs().maxCoeff());
+    metrics.emplace_back("max_abs_err", error.cwiseAbs().maxCoeff<Eigen::PropagateNaN>());
     if (width_ >= 11 && height_ >= 11) {
       // Row-major pixel lists (row r · width + c), as io::Image keeps them.
       const auto rows = [](const Eigen::MatrixXd& m) {

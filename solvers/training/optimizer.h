@@ -97,9 +97,24 @@ class TrainingStage {
   // After each step: counts it, records its time, reports progress (at the learning rate
   // shown, 0 for none) and writes a checkpoint when one is due.
   void finish_step(double learning_rate, double milliseconds);
-  // A stage that stops early because it cannot decrease the loss further counts as finished,
-  // with all its steps.
-  void finish_early();
+  // Divergence. After a loss (and its gradient, if not null) has been evaluated at the field's
+  // parameters: whether every term's loss and the gradient are finite. When not, the
+  // divergence is recorded (the step, the first non-finite term, the last finite loss).
+  bool check_finite(const Scalar* gradient);
+  // After an update: whether the field's parameters are finite (recorded as above if not).
+  bool check_finite_parameters();
+  // After a recorded divergence, once the optimizer has put back its last parameters whose
+  // loss was finite: whether to go on from there at half the learning rate
+  // (training.on_divergence: restore_and_halve_lr, while retries are left; says so in a
+  // line). When false, the optimizer returns false and the run ends, reporting the divergence.
+  bool retry_after_divergence();
+  // A stage that ends before its steps are taken: `ended` is converged, failed or
+  // time_budget; `termination` and `message` Ceres' (or empty). The stage counts the
+  // iterations it took, and the next one starts there.
+  void end_early(std::string ended, std::string termination, std::string message);
+  // How a stage that took all its steps ended in the optimizer's own terms (Ceres'
+  // termination type and message), for its report.
+  void set_termination(std::string termination, std::string message);
 
  private:
   friend class Trainer<Scalar>;
@@ -127,7 +142,9 @@ class Optimizer {
   // lm stage here would need a Jacobian of …"), or empty when it can.
   virtual std::string refuse(const ProblemSize& /*size*/) const { return {}; }
 
-  // Runs the rest of the stage. Returns false when stopped by a stop request.
+  // Runs the rest of the stage. Returns false when stopped by a stop request, or by a
+  // divergence that TrainingStage::check_finite recorded (with the field put back at its last
+  // parameters whose loss was finite).
   virtual bool run(TrainingStage<float>& stage) = 0;
   virtual bool run(TrainingStage<double>& stage) = 0;
 

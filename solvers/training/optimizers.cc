@@ -53,7 +53,8 @@ class LossFunction final : public ceres::FirstOrderFunction {
     theta_ = Eigen::Map<const Eigen::VectorXd>(parameters, parameters_).cast<Scalar>();
     *cost = evaluate_(theta_.data(), gradient_.data());
     if (gradient) Eigen::Map<Eigen::VectorXd>(gradient, parameters_) = gradient_.template cast<double>();
-    return std::isfinite(*cost);
+    // A non-finite trial point is rejected: the line search then tries a shorter step.
+    return std::isfinite(*cost) && (!gradient || gradient_.allFinite());
   }
   int NumParameters() const override { return parameters_; }
 
@@ -173,6 +174,15 @@ bool finish_ceres_step(TrainingStage<Scalar>& stage, double& last) {
   return !stage.stop_requested();
 }
 
+// The report of a Ceres stage: why it ended, when short of its steps (CONVERGENCE: no
+// decrease found; FAILURE: the line search or the linear solver gave up).
+template <typename Scalar>
+void end_ceres_stage(TrainingStage<Scalar>& stage, ceres::TerminationType type, const std::string& message) {
+  const std::string termination = ceres::TerminationTypeToString(type);
+  if (stage.step() >= stage.steps()) stage.set_termination(termination, message);
+  else stage.end_early(type == ceres::FAILURE ? "failed" : "converged", termination, message);
+}
+
 class AdamOptimizer final : public OptimizerOf<AdamOptimizer, AdamStageOptions> {
  public:
   AdamOptimizer() = default;
@@ -204,18 +214,50 @@ class AdamOptimizer final : public OptimizerOf<AdamOptimizer, AdamStageOptions> 
     stage.set_time_budget(options.seconds);
     fields::Field<Scalar>& field = stage.field();
     autodiff::Vector<Scalar> gradient(field.parameter_count());
+    // The state before the last update: its parameters' loss was finite. A non-finite step
+    // goes back to it, so that what is kept (and checkpointed) is never a NaN state.
+    struct {
+      autodiff::Vector<Scalar> theta, m, v;
+      std::int64_t t = -1;  // -1: none yet in this stage (the field is as the stage began)
+    } good;
+    const auto go_back = [&] {
+      if (good.t < 0) return;
+      field.parameters() = good.theta;
+      adam.first_moment() = good.m;
+      adam.second_moment() = good.v;
+      adam.set_steps(good.t);
+    };
     while (stage.step() < stage.steps()) {
       if (stage.stop_requested()) return false;
       const double start = now_seconds();
       stage.prepare_step();
       stage.step_gradient(gradient.data());
       const double lr =
-          options.seconds > 0 ? options.learning_rate_at(std::min(1.0, stage.seconds() / options.seconds))
-                              : options.learning_rate(stage.step(), stage.steps());
-      adam.step(field.parameters().data(), gradient.data(), lr);
+          lr_scale_ * (options.seconds > 0
+                           ? options.learning_rate_at(std::min(1.0, stage.seconds() / options.seconds))
+                           : options.learning_rate(stage.step(), stage.steps()));
+      bool finite = stage.check_finite(gradient.data());
+      if (finite) {
+        good.theta = field.parameters();
+        good.m = adam.first_moment();
+        good.v = adam.second_moment();
+        good.t = adam.steps();
+        adam.step(field.parameters().data(), gradient.data(), lr);
+        finite = stage.check_finite_parameters();
+      }
+      if (!finite) {
+        go_back();
+        if (!stage.retry_after_divergence()) return false;
+        lr_scale_ *= 0.5;
+        continue;
+      }
       stage.finish_step(lr, 1e3 * (now_seconds() - start));
       // The stage is over when its budget is spent (its steps count what was run).
-      if (options.seconds > 0 && stage.seconds() >= options.seconds) break;
+      if (options.seconds > 0 && stage.seconds() >= options.seconds) {
+        if (stage.step() < stage.steps())
+          stage.end_early("time_budget", "", "its " + text(options.seconds) + " s were spent");
+        break;
+      }
     }
     return true;
   }
@@ -229,6 +271,9 @@ class AdamOptimizer final : public OptimizerOf<AdamOptimizer, AdamStageOptions> 
     if (float_) write(float_->first_moment(), float_->second_moment(), float_->steps());
     else if (double_) write(double_->first_moment(), double_->second_moment(), double_->steps());
     else if (loaded_) write(loaded_->m, loaded_->v, loaded_->t);
+    else return;
+    // Only after a retry (training.on_divergence): checkpoints of other runs stay as they were.
+    if (lr_scale_ != 1) file.write_attribute(group + "/adam/m", "lr_scale", lr_scale_);
   }
   void load(const io::H5Reader& file, const std::string& group) override {
     if (!file.has_dataset(group + "/adam/m")) return;
@@ -236,6 +281,9 @@ class AdamOptimizer final : public OptimizerOf<AdamOptimizer, AdamStageOptions> 
     loaded_ = Moments{file.read_vector<double>(group + "/adam/m"),
                       file.read_vector<double>(group + "/adam/v"),
                       file.read_attribute<std::int64_t>(group + "/adam/m", "t")};
+    lr_scale_ = file.has_attribute(group + "/adam/m", "lr_scale")
+                    ? file.read_attribute<double>(group + "/adam/m", "lr_scale")
+                    : 1.0;
   }
 
  private:
@@ -261,6 +309,8 @@ class AdamOptimizer final : public OptimizerOf<AdamOptimizer, AdamStageOptions> 
     return **adam;
   }
 
+  // Halved at each retry after a divergence (training.on_divergence: restore_and_halve_lr).
+  double lr_scale_ = 1;
   // One of the two, in the training scalar, once the stage runs.
   std::unique_ptr<Adam<float>> float_;
   std::unique_ptr<Adam<double>> double_;
@@ -311,12 +361,19 @@ class LbfgsOptimizer final : public OptimizerOf<LbfgsOptimizer, LbfgsStageOption
       return !stopped;
     });
     ceres_options.callbacks.push_back(&callback);
+    ceres::GradientProblemSolver::Summary summary;
     while (true) {
       ceres_options.max_num_iterations = std::min(segment, stage.steps() - stage.step());
       const int segment_start = stage.step();
-      ceres::GradientProblemSolver::Summary summary;
       ceres::Solve(ceres_options, problem, theta.data(), &summary);
       field.parameters() = theta.cast<Scalar>();
+      // Ceres refuses to start from a point whose loss or gradient is not finite: the run has
+      // diverged before this stage (find out where, for the report).
+      if (summary.termination_type == ceres::FAILURE && !std::isfinite(summary.initial_cost)) {
+        autodiff::Vector<Scalar> gradient(field.parameter_count());
+        stage.loss_and_gradient(field.parameters().data(), gradient.data());
+        if (!stage.check_finite(gradient.data())) return false;
+      }
       // A segment that ends early (its line search found no decrease) ends the stage only
       // when the objective cannot change (no segments) or it made no step at all: an update
       // of the weights or points can give L-BFGS somewhere to go again.
@@ -325,8 +382,9 @@ class LbfgsOptimizer final : public OptimizerOf<LbfgsOptimizer, LbfgsStageOption
       stage.renew_points(options.resample_every);
       stage.update_weights();
     }
-    if (!stopped) stage.finish_early();
-    return !stopped;
+    if (stopped) return false;
+    end_ceres_stage(stage, summary.termination_type, summary.message);
+    return true;
   }
 };
 
@@ -381,6 +439,7 @@ class LmOptimizer final : public OptimizerOf<LmOptimizer, LmStageOptions> {
     bool stopped = false;
     double last = now_seconds();
     std::vector<std::unique_ptr<TermCost<Scalar>>> costs;
+    ceres::Solver::Summary summary;
     StepCallback callback([&](const ceres::IterationSummary& summary) {
       field.parameters() = theta.template cast<Scalar>();
       double total = 0;
@@ -423,12 +482,15 @@ class LmOptimizer final : public OptimizerOf<LmOptimizer, LmStageOptions> {
       for (const auto& cost : costs) problem.AddResidualBlock(cost.get(), nullptr, theta.data());
       ceres_options.max_num_iterations = std::min(segment, stage.steps() - stage.step());
       const int segment_start = stage.step();
-      ceres::Solver::Summary summary;
+      summary = ceres::Solver::Summary{};
       ceres::Solve(ceres_options, &problem, &summary);
-      // Failing later (e.g. too many non-finite trial steps) ends the stage at its last
-      // iterate.
-      if (summary.termination_type == ceres::FAILURE && summary.iterations.empty())
-        throw std::runtime_error(name + "Ceres failed: " + summary.message);
+      // Ceres cannot start where a residual is not finite: the run diverged before this
+      // stage. (Failing later, e.g. after too many non-finite trial steps, ends the stage at
+      // its last iterate, reported as failed.)
+      if (summary.termination_type == ceres::FAILURE && summary.iterations.empty()) {
+        for (size_t k = 0; k < costs.size(); ++k) stage.set_term_loss(k, costs[k]->loss_at(theta.data()));
+        if (!stage.check_finite(nullptr)) return false;
+      }
       field.parameters() = theta.cast<Scalar>();
       if (summary.iterations.size() <= 1)  // no step taken: report the losses at the start
         for (size_t k = 0; k < costs.size(); ++k) stage.set_term_loss(k, costs[k]->loss_at(theta.data()));
@@ -440,8 +502,9 @@ class LmOptimizer final : public OptimizerOf<LmOptimizer, LmStageOptions> {
       if (stopped || stage.ends_after_segment(segment, segment_start, early)) break;
       stage.renew_points(options.resample_every);
     }
-    if (!stopped) stage.finish_early();
-    return !stopped;
+    if (stopped) return false;
+    end_ceres_stage(stage, summary.termination_type, summary.message);
+    return true;
   }
 };
 

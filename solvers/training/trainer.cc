@@ -21,6 +21,15 @@ double now_seconds() {
 
 }  // namespace
 
+std::string Divergence::describe() const {
+  std::ostringstream out;
+  out << "step " << step << " (stage " << stage + 1 << ", " << optimizer << "): " << what
+      << " is not finite; ";
+  if (last_finite_step > 0) out << "last finite loss " << last_finite_loss << " at step " << last_finite_step;
+  else out << "no step of this run had a finite loss";
+  return out.str();
+}
+
 template <typename Scalar>
 class Trainer<Scalar>::View final : public StrategyView<Scalar> {
  public:
@@ -288,10 +297,68 @@ void Trainer<Scalar>::step_gradient(Scalar* gradient) {
 }
 
 template <typename Scalar>
+void Trainer<Scalar>::record_divergence(std::string what) {
+  Divergence d;
+  d.step = global_step_ + 1;
+  d.stage = stage_;
+  d.optimizer = options_.stages[stage_].optimizer;
+  d.what = std::move(what);
+  d.last_finite_step = last_finite_step_;
+  d.last_finite_loss = last_finite_loss_;
+  divergence_ = std::move(d);
+}
+
+template <typename Scalar>
+bool Trainer<Scalar>::check_finite(const Scalar* gradient) {
+  for (size_t k = 0; k < losses_.size(); ++k)
+    if (!std::isfinite(losses_[k])) {
+      record_divergence("loss term '" + names_[k] + "'");
+      return false;
+    }
+  if (gradient && !Eigen::Map<const autodiff::Vector<Scalar>>(gradient, field_.parameter_count()).allFinite()) {
+    record_divergence("the gradient");
+    return false;
+  }
+  return true;
+}
+
+template <typename Scalar>
+bool Trainer<Scalar>::check_finite_parameters() {
+  if (field_.parameters().allFinite()) return true;
+  record_divergence("the parameters after the update");
+  return false;
+}
+
+template <typename Scalar>
+bool Trainer<Scalar>::retry_after_divergence() {
+  if (!divergence_) return false;
+  if (options_.on_divergence != "restore_and_halve_lr" || divergence_retries_ >= options_.divergence_retries)
+    return false;
+  ++divergence_retries_;
+  notice(divergence_->describe() + "; back to step " + std::to_string(divergence_->last_finite_step) +
+         "'s parameters with the learning rate halved (retry " + std::to_string(divergence_retries_) +
+         " of " + std::to_string(options_.divergence_retries) + ")");
+  divergence_.reset();
+  return true;
+}
+
+template <typename Scalar>
+void Trainer<Scalar>::notice(const std::string& line) const {
+  if (callbacks_ && callbacks_->notice) callbacks_->notice(line);
+}
+
+template <typename Scalar>
 void Trainer<Scalar>::finish_step(double learning_rate, double milliseconds) {
   step_ms_.push_back(milliseconds);
   ++stage_step_;
   ++global_step_;
+  double total = 0;
+  for (double l : losses_) total += l;
+  if (std::isfinite(total)) {
+    last_finite_step_ = global_step_;
+    last_finite_loss_ = total;
+    last_finite_losses_ = losses_;
+  }
   if (callbacks_->progress) callbacks_->progress(progress(learning_rate));
   if (options_.checkpoint_every > 0 && global_step_ % options_.checkpoint_every == 0 &&
       callbacks_->checkpoint)
@@ -313,8 +380,26 @@ bool Trainer<Scalar>::run(const Callbacks& callbacks) {
     if (callbacks.stage_begins) callbacks.stage_begins(progress(0.0));
     if (!optimizer_) optimizer_ = stage.settings->clone();  // a resumed stage has its own
     callbacks_ = &callbacks;
+    stage_end_ = StageEnd{};
     TrainingStage<Scalar> view(*this);
-    if (!optimizer_->run(view)) return false;
+    if (!optimizer_->run(view)) {
+      if (divergence_) {
+        notice(divergence_->describe() + "; the field is kept at the last parameters whose loss was finite");
+        // The losses reported are those of the parameters kept.
+        if (!last_finite_losses_.empty()) losses_ = last_finite_losses_;
+      }
+      return false;
+    }
+    stage_end_.iterations = stage_step_;
+    if (stage_end_.ended != "completed") {
+      std::string line = "stage " + std::to_string(stage_ + 1) + " (" + stage.optimizer + ") ended after " +
+                         std::to_string(stage_step_) + " of " + std::to_string(stage.steps) +
+                         " iterations: " + stage_end_.ended;
+      if (!stage_end_.termination.empty()) line += " (Ceres " + stage_end_.termination + ": " + stage_end_.message + ")";
+      else if (!stage_end_.message.empty()) line += " (" + stage_end_.message + ")";
+      notice(line);
+    }
+    stage_ends_.push_back(stage_end_);
     double total = 0;
     for (double l : losses_) total += l;
     stage_losses_.push_back(total);
@@ -351,6 +436,17 @@ void Trainer<Scalar>::save_state(io::H5Writer& file) const {
         file.write("trainer/tangents/" + std::to_string(k), points_[k].tangents);
     }
   file.write("trainer/stage_losses", stage_losses_);
+  std::vector<std::int64_t> iterations;
+  for (size_t k = 0; k < stage_ends_.size(); ++k) {
+    iterations.push_back(stage_ends_[k].iterations);
+    const std::string key = "stage_end_" + std::to_string(k);
+    file.write_attribute("trainer", key, stage_ends_[k].ended);
+    file.write_attribute("trainer", key + "_termination", stage_ends_[k].termination);
+    file.write_attribute("trainer", key + "_message", stage_ends_[k].message);
+  }
+  file.write("trainer/stage_iterations", iterations);
+  if (divergence_retries_ > 0)
+    file.write_attribute("trainer", "divergence_retries", static_cast<std::int64_t>(divergence_retries_));
   file.write("trainer/stage_errors", stage_errors_);
   for (size_t k = 0; k < sequences_.size(); ++k)
     file.write_attribute("trainer", "sequence_" + std::to_string(k), sequences_[k].state());
@@ -397,6 +493,24 @@ void Trainer<Scalar>::load_state(const io::H5Reader& file) {
     const Eigen::VectorXd s = file.read_vector<double>("trainer/stage_losses");
     stage_losses_.assign(s.data(), s.data() + s.size());
   }
+  // Checkpoints from before stage reports: their stages are taken as completed.
+  stage_ends_.assign(stage_losses_.size(), StageEnd{});
+  for (size_t k = 0; k < stage_ends_.size(); ++k) {
+    stage_ends_[k].iterations = k < options_.stages.size() ? options_.stages[k].steps : 0;
+    const std::string key = "stage_end_" + std::to_string(k);
+    if (!file.has_attribute("trainer", key)) continue;
+    stage_ends_[k].ended = file.read_attribute<std::string>("trainer", key);
+    stage_ends_[k].termination = file.read_attribute<std::string>("trainer", key + "_termination");
+    stage_ends_[k].message = file.read_attribute<std::string>("trainer", key + "_message");
+  }
+  if (file.has_dataset("trainer/stage_iterations")) {
+    const auto it = file.read_vector<std::int64_t>("trainer/stage_iterations");
+    for (Eigen::Index k = 0; k < it.size() && k < static_cast<Eigen::Index>(stage_ends_.size()); ++k)
+      stage_ends_[k].iterations = static_cast<int>(it[k]);
+  }
+  divergence_retries_ = file.has_attribute("trainer", "divergence_retries")
+                            ? static_cast<int>(file.read_attribute<std::int64_t>("trainer", "divergence_retries"))
+                            : 0;
   if (file.has_dataset("trainer/stage_errors")) {
     const Eigen::VectorXd e = file.read_vector<double>("trainer/stage_errors");
     stage_errors_.assign(e.data(), e.data() + e.size());
@@ -489,10 +603,22 @@ void TrainingStage<Scalar>::finish_step(double learning_rate, double millisecond
   trainer_.finish_step(learning_rate, milliseconds);
 }
 template <typename Scalar>
-void TrainingStage<Scalar>::finish_early() {
-  const int steps = this->steps();
-  trainer_.global_step_ += steps - trainer_.stage_step_;
-  trainer_.stage_step_ = steps;
+bool TrainingStage<Scalar>::check_finite(const Scalar* gradient) {
+  return trainer_.check_finite(gradient);
+}
+template <typename Scalar>
+bool TrainingStage<Scalar>::check_finite_parameters() { return trainer_.check_finite_parameters(); }
+template <typename Scalar>
+bool TrainingStage<Scalar>::retry_after_divergence() { return trainer_.retry_after_divergence(); }
+template <typename Scalar>
+void TrainingStage<Scalar>::end_early(std::string ended, std::string termination, std::string message) {
+  trainer_.stage_end_.ended = std::move(ended);
+  set_termination(std::move(termination), std::move(message));
+}
+template <typename Scalar>
+void TrainingStage<Scalar>::set_termination(std::string termination, std::string message) {
+  trainer_.stage_end_.termination = std::move(termination);
+  trainer_.stage_end_.message = std::move(message);
 }
 
 template class TrainingStage<float>;

@@ -5,8 +5,11 @@
 // (solvers/training/optimizer.h; adam, lbfgs and lm are described in solvers/training/optimizers.h); the
 // trainer runs it through a TrainingStage and knows none by name.
 //
-// A stage that stops early because its optimizer cannot decrease the loss further
-// (converged) counts as finished, with all its steps.
+// A stage that stops short of its steps (its optimizer converged or failed, or its time budget
+// ran out) is over: the next stage starts there, and the stage's report (StageEnd) says how
+// many iterations it took and why it ended. A loss, gradient or update that is not finite
+// ends the run (Divergence), with the field at the last parameters whose loss was finite,
+// unless training.on_divergence retries from there at half the learning rate.
 //
 // A run is reproducible from its seed and thread count. The whole state (parameters, Adam
 // moments and step, stage and step counters, random engine, current points) is saved by
@@ -38,7 +41,9 @@
 
 #include <algorithm>
 #include <functional>
+#include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -71,6 +76,27 @@ struct Progress {
   std::vector<std::pair<std::string, double>> extras;  // e.g. the minimum causal weight
 };
 
+// How a stage ended, for progress lines and metrics.json.
+struct StageEnd {
+  int iterations = 0;              // steps taken (a resumed stage's include those before it)
+  std::string ended = "completed"; // completed | converged | failed | time_budget
+  std::string termination;         // Ceres' termination type (CONVERGENCE, FAILURE, …); "" for Adam
+  std::string message;             // Ceres' message, or why the stage ended early
+};
+
+// The step at which a run went non-finite.
+struct Divergence {
+  long step = 0;          // counted as progress lines count (the first step of a run is 1)
+  int stage = 0;          // 0-based
+  std::string optimizer;
+  std::string what;       // "loss term 'interior'", "the gradient", "the parameters after the update"
+  long last_finite_step = 0;  // the last step whose loss was finite (0: none in this run)
+  double last_finite_loss = std::numeric_limits<double>::quiet_NaN();
+  // One line: "step 12 (stage 1, adam): loss term 'interior' is not finite; last finite loss
+  // 3.1e+05 at step 11".
+  std::string describe() const;
+};
+
 template <typename Scalar>
 class Trainer {
  public:
@@ -84,6 +110,9 @@ class Trainer {
     // After each stage: the error against the exact solution then (NaN: none), kept per
     // stage in stage_errors() and in the checkpoint.
     std::function<double()> stage_error;
+    // A line to show beside the progress lines: why a stage ended early, a retry after a
+    // non-finite step.
+    std::function<void(const std::string&)> notice;
   };
 
   // `communicator` (not owned; null: world_communicator()) splits each step over its ranks.
@@ -97,11 +126,15 @@ class Trainer {
   double loss_and_gradient_at(const Scalar* params, Scalar* gradient);
   Communicator& communicator() const { return communicator_; }
 
-  // Runs the remaining stages. Returns false when stopped by stop_requested.
+  // Runs the remaining stages. Returns false when stopped by stop_requested or by a
+  // divergence (divergence() tells which; the field then holds the last parameters whose loss
+  // was finite).
   bool run(const Callbacks& callbacks);
+  const std::optional<Divergence>& divergence() const { return divergence_; }
 
   const std::vector<std::string>& term_names() const { return names_; }
-  // Loss of each term at the last step (weighted).
+  // Loss of each term at the last step (weighted); after a divergence, at the last step
+  // whose loss was finite.
   const std::vector<double>& term_losses() const { return losses_; }
   long step() const { return global_step_; }
   // Stages still to run: none after a finished run (resuming it trains nothing more unless
@@ -113,6 +146,8 @@ class Trainer {
   const std::vector<double>& stage_errors() const { return stage_errors_; }
   // Wall seconds of each finished stage (NaN for stages finished before a resume).
   const std::vector<double>& stage_seconds() const { return stage_seconds_; }
+  // How each finished stage ended (iterations actually taken, why it ended).
+  const std::vector<StageEnd>& stage_ends() const { return stage_ends_; }
 
   // The strategies' figures, for metrics.json, in their order.
   std::vector<std::pair<std::string, double>> extra_metrics() const;
@@ -161,6 +196,12 @@ class Trainer {
   void finish_step(double learning_rate, double milliseconds);
   void update_weights();
   Progress progress(double lr) const;
+  // See TrainingStage: divergence checks and retries, early ends.
+  bool check_finite(const Scalar* gradient);
+  bool check_finite_parameters();
+  bool retry_after_divergence();
+  void record_divergence(std::string what);
+  void notice(const std::string& line) const;
 
   const Problem& problem_;
   fields::Field<Scalar>& field_;
@@ -174,6 +215,13 @@ class Trainer {
   std::vector<autodiff::Matrix<Scalar>> tangents_scalar_;  // empty: the spec's tangents
   std::vector<std::unique_ptr<Residual>> residuals_;
   std::vector<double> losses_, stage_losses_, stage_errors_, stage_seconds_, step_ms_;
+  std::vector<StageEnd> stage_ends_;
+  StageEnd stage_end_;                    // of the current stage, filled in as it ends
+  std::optional<Divergence> divergence_;  // set when a step went non-finite
+  long last_finite_step_ = 0;
+  double last_finite_loss_ = std::numeric_limits<double>::quiet_NaN();
+  std::vector<double> last_finite_losses_;  // per term, at last_finite_step_
+  int divergence_retries_ = 0;            // taken so far (training.on_divergence)
   std::unique_ptr<Optimizer> optimizer_;  // of the current stage, while it runs or resumes
   const Callbacks* callbacks_ = nullptr;  // of the current run()
   double time_budget_ = 0;                // of the current stage (TrainingStage::set_time_budget)

@@ -33,6 +33,8 @@ TrainingOptions TrainingOptions::from_config(const io::ConfigNode& node) {
   o.resample_every = in_range_or(node, "resample_every", 1, 1 << 30, o.resample_every);
   o.log_every = in_range_or(node, "log_every", 1, 1 << 30, o.log_every);
   o.checkpoint_every = in_range_or(node, "checkpoint_every", 0, 1 << 30, o.checkpoint_every);
+  o.on_divergence = node.get_choice("on_divergence", {"stop", "restore_and_halve_lr"}, o.on_divergence);
+  o.divergence_retries = in_range_or(node, "divergence_retries", 1, 100, o.divergence_retries);
   o.sampler = node.get_choice("sampler", sampler_names(), o.sampler);
   o.adaptive = adaptive_from_config(node);
   o.balance = balance_from_config(node);
@@ -66,6 +68,8 @@ YAML::Node TrainingOptions::to_yaml() const {
   n["resample_every"] = resample_every;
   n["log_every"] = log_every;
   n["checkpoint_every"] = checkpoint_every;
+  n["on_divergence"] = on_divergence;
+  if (on_divergence != "stop") n["divergence_retries"] = divergence_retries;
   for (const auto& s : stages) {
     YAML::Node y;
     y["optimizer"] = s.optimizer;

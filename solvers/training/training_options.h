@@ -11,6 +11,8 @@
 //     resample_every: 1            # new points every k Adam steps (L-BFGS keeps its points)
 //     log_every: 100               # progress lines when the output is not a terminal
 //     checkpoint_every: 0          # steps between checkpoints (0: at the end and on Ctrl-C)
+//     on_divergence: stop          # stop | restore_and_halve_lr: what a non-finite step does
+//     divergence_retries: 3        # restore_and_halve_lr: at most this many times a run
 //     sampler: uniform             # uniform | sobol | halton: interior, face and initial points
 //     adaptive: {every: 500, candidates: 10000, add: 100, max_points: 2000}  # RAR; absent: off
 //     balance: fixed               # fixed | grad_norm | {method: grad_norm, every: 100, alpha: 0.1}
@@ -69,6 +71,12 @@ struct TrainingOptions {
   int resample_every = 1;
   int log_every = 100;
   int checkpoint_every = 0;
+  // A loss, gradient or update that is not finite ends the run with the field at the last
+  // parameters whose loss was finite (`stop`), or sends an Adam stage back there at half its
+  // learning rate, up to divergence_retries times a run (`restore_and_halve_lr`; L-BFGS and
+  // LM never step onto a non-finite loss, and stop where they start on one).
+  std::string on_divergence = "stop";
+  int divergence_retries = 3;
   std::vector<StageOptions> stages{StageOptions{}};
   // Sampling and loss balancing: see solvers/training/sampler.h and solvers/loss_balancing.h.
   std::string sampler = "uniform";

@@ -378,7 +378,8 @@ TEST(EvalTest, RelativeDataPathsResolveAgainstTheOriginalConfigFolder) {
 }
 
 // nfield bench --accuracy on a folder holding one tiny case: the table's JSON line carries
-// the final error and the error after the Adam stage, both as metrics.json has them.
+// the final error and the error after the Adam stage, both as metrics.json has them. The tiny
+// case misses the table's target (1e-6): exit code 4 after a line naming it, 0 with --no-fail.
 TEST(AccuracyBenchTest, ReportsTheErrorAfterEachStage) {
   const auto dir = scratch_dir();
   std::filesystem::create_directories(dir / "configs");
@@ -391,10 +392,11 @@ TEST(AccuracyBenchTest, ReportsTheErrorAfterEachStage) {
   Outcome o = run_nfield({"bench", "--accuracy", "--cases", "poisson_2d", "--configs",
                           (dir / "configs").string(), "--out", (dir / "out").string()},
                          dir, dir / "capture");
-  ASSERT_EQ(o.code, 0) << describe(o);
+  ASSERT_EQ(o.code, 4) << describe(o);
+  EXPECT_NE(o.out.find("\n1 of 1 cases missed their targets: poisson_2d\n"), std::string::npos) << o.out;
   const nlohmann::json metrics = read_json(dir / "out" / "poisson_2d" / "metrics.json");
   ASSERT_EQ(metrics["stages"].size(), 2u);
-  const std::string last = o.out.substr(o.out.rfind("{\"case\""));
+  const std::string last = o.out.substr(o.out.rfind("{\"case\""), o.out.rfind("\n1 of 1") - o.out.rfind("{\"case\""));
   const nlohmann::json row = nlohmann::json::parse(last);
   EXPECT_EQ(row["case"], "poisson_2d");
   EXPECT_EQ(row["rel_l2"].get<double>(), metrics["rel_l2"].get<double>());
@@ -403,6 +405,13 @@ TEST(AccuracyBenchTest, ReportsTheErrorAfterEachStage) {
   // The last stage's error is the run's final error (same grid).
   EXPECT_EQ(metrics["stages"][1]["rel_l2"].get<double>(), metrics["rel_l2"].get<double>());
   EXPECT_LT(row["rel_l2"].get<double>(), row["rel_l2_after_adam"].get<double>());
+  EXPECT_FALSE(row["met"].get<bool>());
+
+  o = run_nfield({"bench", "--accuracy", "--no-fail", "--cases", "poisson_2d", "--configs",
+                  (dir / "configs").string(), "--out", (dir / "out").string()},
+                 dir, dir / "capture");
+  EXPECT_EQ(o.code, 0) << describe(o);
+  EXPECT_NE(o.out.find("1 of 1 cases missed their targets: poisson_2d"), std::string::npos) << o.out;
 
   o = run_nfield({"bench", "--accuracy", "--cases", "poison_2d", "--configs", (dir / "configs").string()},
                  dir, dir / "capture");

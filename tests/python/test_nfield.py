@@ -123,6 +123,18 @@ class RunTest(unittest.TestCase):
             with self.assertRaises(nfield.H5Error):
                 nfield.run(TINY, out=out, resume=TINY)
 
+    def test_divergence_raises_with_the_metrics(self):
+        with tempfile.TemporaryDirectory() as out:
+            with self.assertRaisesRegex(nfield.DivergedError, r"^diverged: step \d+ \(stage 1, adam\)") as raised:
+                nfield.run(TINY, set={"training.stages[0].lr": 1e30, "training.precision": "float",
+                                      "training.stages[0].steps": 200,
+                                      "output.png": False}, out=out)
+            self.assertIsInstance(raised.exception, RuntimeError)
+            metrics = raised.exception.metrics
+            self.assertFalse(metrics["finished"])
+            self.assertEqual(metrics["divergence"]["optimizer"], "adam")
+            self.assertTrue(os.path.exists(os.path.join(out, "checkpoint.h5")))
+
     def test_validate_resolves_overrides(self):
         text = nfield.validate(TINY, set={"training.seed": 4})
         self.assertIn("seed: 4", text)

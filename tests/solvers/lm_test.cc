@@ -182,7 +182,8 @@ TEST(LevenbergMarquardt, ResampleEveryDrawsNewPointsAndKeepsTheStepCount) {
 }
 
 // Fewer residuals than parameters: LM fits them to rounding, its trust region then
-// collapses and Ceres ends the stage early. The stage still counts as finished.
+// collapses and Ceres ends the stage early. The stage is over, reported as converged with the
+// iterations it took (the run's step count is the steps taken), and the next one runs.
 TEST(LevenbergMarquardt, EarlyConvergenceFinishesTheStage) {
   const std::string stages =
       "    - {optimizer: lm, steps: 400}\n"
@@ -194,11 +195,20 @@ TEST(LevenbergMarquardt, EarlyConvergenceFinishesTheStage) {
   fields::Field<double> field(setup.field);
   Trainer<double> trainer(*setup.problem, field, setup.training);
   ASSERT_TRUE(trainer.run({}));
-  EXPECT_EQ(trainer.step(), 402);
   ASSERT_EQ(trainer.stage_losses().size(), 2u);
   EXPECT_LT(trainer.stage_losses()[0], 1e-20);
+  ASSERT_EQ(trainer.stage_ends().size(), 2u);
+  const StageEnd& lm = trainer.stage_ends()[0];
+  EXPECT_EQ(lm.ended, "converged");
+  EXPECT_EQ(lm.termination, "CONVERGENCE");
+  EXPECT_FALSE(lm.message.empty());
   // Ceres took fewer iterations than allowed (one duration recorded per iteration).
-  EXPECT_LT(trainer.step_milliseconds().size(), 402u);
+  EXPECT_GT(lm.iterations, 0);
+  EXPECT_LT(lm.iterations, 400);
+  EXPECT_EQ(trainer.stage_ends()[1].iterations, 2);
+  EXPECT_EQ(trainer.stage_ends()[1].ended, "completed");
+  EXPECT_EQ(trainer.step(), lm.iterations + 2);
+  EXPECT_EQ(trainer.step_milliseconds().size(), static_cast<size_t>(lm.iterations + 2));
 }
 
 // A Jacobian beyond Ceres' int-sized dense matrices is refused with a located message when

@@ -7,10 +7,12 @@
 
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <string>
 
 #include "fields/field_io.h"
 #include "io/hdf5_file.h"
+#include "solvers/output/grid_output.h"
 #include "solvers/problems/problems.h"
 #include "solvers/run.h"
 #include "solvers/training/trainer.h"
@@ -150,6 +152,30 @@ class OwnEquation final : public Problem {
  private:
   Domain domain_;
 };
+
+// A field that is NaN at one grid point has NaN errors, never the largest of its finite ones
+// (std::max and Eigen's default maxCoeff drop a NaN).
+TEST(GridError, ANonFiniteValueGivesNaNMetrics) {
+  const RunSetup setup = load_run(write_config(kPoisson), {});
+  const fields::Field<double> field(setup.field);
+  const auto evaluate = [&](const autodiff::StreamLayout& layout, const Eigen::MatrixXd& x, bool poison) {
+    autodiff::Streams<double> out;
+    field.evaluate(layout, x, out);
+    if (poison) out.data(x.rows() / 2, 0) = std::numeric_limits<double>::quiet_NaN();
+    return out;
+  };
+  const GridMetrics clean = grid_error(*setup.problem,
+                                       [&](const auto& l, const auto& x) { return evaluate(l, x, false); },
+                                       setup.output);
+  ASSERT_TRUE(clean.has_error);
+  EXPECT_TRUE(std::isfinite(clean.rel_l2));
+  EXPECT_GT(clean.max_abs_err, 0);
+  const GridMetrics poisoned = grid_error(*setup.problem,
+                                          [&](const auto& l, const auto& x) { return evaluate(l, x, true); },
+                                          setup.output);
+  EXPECT_TRUE(std::isnan(poisoned.rel_l2));
+  EXPECT_TRUE(std::isnan(poisoned.max_abs_err));
+}
 
 TEST(ProblemRegistry, OutsideCodeRegistersAProblem) {
   register_problem("Own_Equation", [](const ProblemContext& c) { return std::make_unique<OwnEquation>(c); });
