@@ -403,11 +403,37 @@ TEST(AccuracyBenchTest, ReportsTheErrorAfterEachStage) {
   // The last stage's error is the run's final error (same grid).
   EXPECT_EQ(metrics["stages"][1]["rel_l2"].get<double>(), metrics["rel_l2"].get<double>());
   EXPECT_LT(row["rel_l2"].get<double>(), row["rel_l2_after_adam"].get<double>());
+  EXPECT_FALSE(row.contains("sign_accuracy_band"));  // no SDF there
 
   o = run_nfield({"bench", "--accuracy", "--cases", "poison_2d", "--configs", (dir / "configs").string()},
                  dir, dir / "capture");
   EXPECT_EQ(o.code, 2) << describe(o);
   EXPECT_NE(o.err.find("unknown case 'poison_2d' (valid: poisson_2d,"), std::string::npos) << o.err;
+}
+
+// An SDF case's JSON line carries both sign shares of its metrics.json: the whole grid's and
+// that of the 5 % band around the reference surface (a few steps on the shipped sphere).
+TEST(AccuracyBenchTest, ReportsBothSignSharesOfAnSdfCase) {
+  const auto dir = scratch_dir();
+  std::filesystem::create_directories(dir / "configs");
+  const std::string sphere = (std::filesystem::path(NFIELD_SOURCE_DIR) / "data/meshes/sphere.ply").string();
+  write_text(dir / "configs" / "sdf_bunny.yaml",
+             "problem: sdf\nequation: {points: " + sphere + ", reference_mesh: " + sphere + "}\n"
+             "field: {type: siren, hidden: [16, 16], first_omega: 3, hidden_omega: 3}\n"
+             "training:\n  threads: 1\n  batch: {surface: 128, interior: 128}\n"
+             "  stages: [{optimizer: adam, steps: 30, lr: 1.0e-3}]\n"
+             "output: {grid: [16, 16, 16], png: false}\n");
+  Outcome o = run_nfield({"bench", "--accuracy", "--cases", "sdf_bunny", "--configs", (dir / "configs").string(),
+                          "--out", (dir / "out").string()},
+                         dir, dir / "capture");
+  ASSERT_EQ(o.code, 0) << describe(o);
+  const nlohmann::json metrics = read_json(dir / "out" / "sdf_bunny" / "metrics.json");
+  const nlohmann::json row = nlohmann::json::parse(o.out.substr(o.out.rfind("{\"case\"")));
+  for (const char* key : {"sign_accuracy", "sign_accuracy_band"}) {
+    ASSERT_TRUE(metrics[key].is_number()) << key;
+    EXPECT_EQ(row[key].get<double>(), metrics[key].get<double>()) << key;
+  }
+  EXPECT_LT(o.out.find("sign_accuracy_band"), o.out.rfind("{\"case\"")) << "the table has its row";
 }
 
 // nfield bench --nerf in a tiny setting on the shipped bunny config: the JSON line carries
