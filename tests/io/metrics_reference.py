@@ -16,7 +16,7 @@ SciPy's cKDTree on dense samples of each surface (every triangle subdivided n x 
     distance from a point of a sub-triangle to its nearest corner, its longest edge / sqrt(3)
     (the circumradius of an acute triangle whose largest angle is at least 60 degrees; less
     for an obtuse one). So 0 <= samples' mean - nfield's mean <= that bound, which the
-    subdivision keeps near 1e-3 of the mesh's diagonal.
+    subdivision (edges of at most 5e-3 of the diagonal) keeps below 2.9e-3 of it.
   - Exactly: the triangles of the k nearest samples are candidates, their exact distances
     (this file's own point-triangle distance) give the nearest; a candidate set is complete
     when the k-th sample lies farther than the nearest candidate plus the bound (any closer
@@ -243,7 +243,7 @@ def check_meshes(manifest, results):
     for name, a_name, vb, tb in pairs:
         va, ta = dumped[a_name]
         diagonal = np.linalg.norm(np.vstack([va, vb]).max(0) - np.vstack([va, vb]).min(0))
-        spacing, tie = 2e-3 * diagonal, 1e-9 * diagonal
+        spacing, tie = 5e-3 * diagonal, 1e-9 * diagonal
         got_ab, got_ba, got_nc = results[("mesh", name)]
         ab = one_way(va, ta, vb, tb, spacing, tie)
         ba = one_way(vb, tb, va, ta, spacing, tie)
