@@ -6,7 +6,8 @@
 // worst frame's error for the others), the wall time, and whether the case met all its
 // targets. Ends with one JSON line per case, then a line naming the cases that missed:
 //   {"case", "metric", "value", "target", "met", "criteria", "rel_l2", "rel_l2_after_adam",
-//    "wall_s", "target_wall_s", "stages"}
+//    ["sign_accuracy", "sign_accuracy_band",] "wall_s", "target_wall_s", "stages"}
+// (the sign shares where metrics.json has them: an SDF case with a reference mesh).
 // Each run writes its usual outputs under OUT/CASE.
 #pragma once
 

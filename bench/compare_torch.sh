@@ -217,22 +217,28 @@ def ms(r):
         return "OOM" if r["error"] == "out of memory" else "error"
     return cell(num(r, "median_step_ms"), ".1f")
 
-hdr = ["op", "batch", "nfield ms", "torch ms", "speed-up", "nfield MB", "torch MB", "mem ratio"]
+hdr = ["op", "batch", "nfield ms", "torch ms", "speed-up", "nfield MB", "torch MB", "torch +MB", "mem ratio"]
 rows = []
 for op, n in order:
     a, b = by[(op, n)].get("nfield"), by[(op, n)].get("torch")
     ta, tb = num(a, "median_step_ms"), num(b, "median_step_ms")
-    ma, mb = num(a, "peak_rss_mb"), num(b, "peak_rss_mb")
+    # torch's increase over its idle process (interpreter, libtorch, model): its whole
+    # ru_maxrss would count a baseline that nfield's peak after a reset does not hold.
+    ma, mb, ib = num(a, "peak_rss_mb"), num(b, "peak_rss_mb"), num(b, "step_rss_increase_mb")
     ok_a = a is not None and "error" not in a
     ok_b = b is not None and "error" not in b
     rows.append([op, str(n), ms(a), ms(b),
                  cell(tb / ta, ".2f") + "x" if ok_a and ok_b and ta else "-",
                  cell(ma, ".0f") if ok_a else "-",
                  cell(mb, ".0f") if b is not None else "-",   # peak RSS up to the OOM too
-                 cell(mb / ma, ".2f") + "x" if ok_a and ok_b and ma else "-"])
+                 cell(ib, ".0f") if b is not None else "-",
+                 cell(ib / ma, ".2f") + "x" if ok_a and ok_b and ma and ib is not None else "-"])
 w = [max(len(h), *(len(r[i]) for r in rows)) for i, h in enumerate(hdr)]
 print("  ".join(h.rjust(w[i]) for i, h in enumerate(hdr)))
 for r in rows:
     print("  ".join(c.rjust(w[i]) for i, c in enumerate(r)))
-print("speed-up = torch ms / nfield ms; mem ratio = torch MB / nfield MB (peak RSS).")
+print("speed-up = torch ms / nfield ms; torch MB = its process's peak RSS, torch +MB = that peak "
+      "less the RSS of its idle process (imports, model, optimizer, batches; before the first "
+      "step); mem ratio = torch +MB / nfield MB (nfield's peak RSS after a reset, its own "
+      "process baseline included).")
 EOF

@@ -27,7 +27,11 @@ f is a fixed random tensor; the sample points are drawn before timing starts.
 
 Only the training step is timed (median over --steps steps after --warmup
 untimed ones).  peak_rss_mb is ru_maxrss of this process at the end, so run each
-configuration in its own process.  The address space is capped (--mem-cap-gb,
+configuration in its own process.  It holds the interpreter's and libtorch's own
+memory as well, so idle_rss_mb is ru_maxrss once torch is imported and the model,
+the optimizer and the batches are made (before the first step), and
+step_rss_increase_mb = peak_rss_mb - idle_rss_mb is what the training steps add:
+the figure to set beside nfield's (bench/compare_torch.sh does).  The address space is capped (--mem-cap-gb,
 default 20 GiB, via RLIMIT_AS) so that an over-large configuration fails with
 {"error": "out of memory", ...} instead of taking the machine down.
 
@@ -42,7 +46,8 @@ bench/compare_torch.sh runs all configurations next to `nfield bench`.
 
 Output: one JSON line on stdout (diagnostics go to stderr), e.g.
     {"impl": "torch", "op": "laplacian", "dims": 2, "batch": 4096,
-     "median_step_ms": ..., "peak_rss_mb": ..., "threads": 2, "torch": "...",
+     "median_step_ms": ..., "peak_rss_mb": ..., "idle_rss_mb": ...,
+     "step_rss_increase_mb": ..., "threads": 2, "torch": "...",
      "blas": "..."}
 """
 
@@ -327,7 +332,11 @@ def peak_rss_mb():
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
+IDLE_RSS_MB = None  # ru_maxrss before the first step (set by run_benchmark)
+
+
 def run_benchmark(args):
+    global IDLE_RSS_MB
     d = OPS[args.op]
     torch.manual_seed(args.seed)
     net = Siren(d)
@@ -339,6 +348,7 @@ def run_benchmark(args):
     batches = [(torch.rand(args.batch, d) * 2 - 1).requires_grad_(True)
                for _ in range(n_total)]
     f = torch.randn(args.batch, 1)
+    IDLE_RSS_MB = peak_rss_mb()
 
     def step(x):
         u = net(x)
@@ -387,7 +397,11 @@ def main():
         else:
             raise
         n_params = None
-    record.update(peak_rss_mb=round(peak_rss_mb(), 1), threads=ARGS.threads,
+    peak = peak_rss_mb()
+    record.update(peak_rss_mb=round(peak, 1))
+    if IDLE_RSS_MB is not None:
+        record.update(idle_rss_mb=round(IDLE_RSS_MB, 1), step_rss_increase_mb=round(peak - IDLE_RSS_MB, 1))
+    record.update(threads=ARGS.threads,
                   steps=ARGS.steps, warmup=ARGS.warmup, params=n_params,
                   loadavg_1m_before=round(load_before, 2),
                   torch=torch.__version__, blas=blas_info())

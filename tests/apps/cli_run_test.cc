@@ -377,6 +377,13 @@ TEST(EvalTest, RelativeDataPathsResolveAgainstTheOriginalConfigFolder) {
   EXPECT_TRUE(std::filesystem::exists(dir / "ev" / "solution.vti"));
 }
 
+// The last JSON line of `nfield bench --accuracy` (the summary line follows it).
+nlohmann::json last_case_row(const std::string& out) {
+  const size_t at = out.rfind("{\"case\"");
+  EXPECT_NE(at, std::string::npos) << out;
+  return nlohmann::json::parse(out.substr(at, out.find('\n', at) - at));
+}
+
 // nfield bench --accuracy on a folder holding one tiny case: the table's JSON line carries
 // the final error and the error after the Adam stage, both as metrics.json has them. The tiny
 // case misses the table's target (1e-6): exit code 4 after a line naming it, 0 with --no-fail.
@@ -396,8 +403,7 @@ TEST(AccuracyBenchTest, ReportsTheErrorAfterEachStage) {
   EXPECT_NE(o.out.find("\n1 of 1 cases missed their targets: poisson_2d\n"), std::string::npos) << o.out;
   const nlohmann::json metrics = read_json(dir / "out" / "poisson_2d" / "metrics.json");
   ASSERT_EQ(metrics["stages"].size(), 2u);
-  const std::string last = o.out.substr(o.out.rfind("{\"case\""), o.out.rfind("\n1 of 1") - o.out.rfind("{\"case\""));
-  const nlohmann::json row = nlohmann::json::parse(last);
+  const nlohmann::json row = last_case_row(o.out);
   EXPECT_EQ(row["case"], "poisson_2d");
   EXPECT_EQ(row["rel_l2"].get<double>(), metrics["rel_l2"].get<double>());
   EXPECT_EQ(row["rel_l2_after_adam"].get<double>(), metrics["stages"][0]["rel_l2"].get<double>());
@@ -406,6 +412,7 @@ TEST(AccuracyBenchTest, ReportsTheErrorAfterEachStage) {
   EXPECT_EQ(metrics["stages"][1]["rel_l2"].get<double>(), metrics["rel_l2"].get<double>());
   EXPECT_LT(row["rel_l2"].get<double>(), row["rel_l2_after_adam"].get<double>());
   EXPECT_FALSE(row["met"].get<bool>());
+  EXPECT_FALSE(row.contains("sign_accuracy_band"));  // no SDF there
 
   o = run_nfield({"bench", "--accuracy", "--no-fail", "--cases", "poisson_2d", "--configs",
                   (dir / "configs").string(), "--out", (dir / "out").string()},
@@ -417,6 +424,32 @@ TEST(AccuracyBenchTest, ReportsTheErrorAfterEachStage) {
                  dir, dir / "capture");
   EXPECT_EQ(o.code, 2) << describe(o);
   EXPECT_NE(o.err.find("unknown case 'poison_2d' (valid: poisson_2d,"), std::string::npos) << o.err;
+}
+
+// An SDF case's JSON line carries both sign shares of its metrics.json: the whole grid's and
+// that of the 5 % band around the reference surface (a few steps on the shipped sphere).
+TEST(AccuracyBenchTest, ReportsBothSignSharesOfAnSdfCase) {
+  const auto dir = scratch_dir();
+  std::filesystem::create_directories(dir / "configs");
+  const std::string sphere = (std::filesystem::path(NFIELD_SOURCE_DIR) / "data/meshes/sphere.ply").string();
+  write_text(dir / "configs" / "sdf_bunny.yaml",
+             "problem: sdf\nequation: {points: " + sphere + ", reference_mesh: " + sphere + "}\n"
+             "field: {type: siren, hidden: [16, 16], first_omega: 3, hidden_omega: 3}\n"
+             "training:\n  threads: 1\n  batch: {surface: 128, interior: 128}\n"
+             "  stages: [{optimizer: adam, steps: 30, lr: 1.0e-3}]\n"
+             "output: {grid: [16, 16, 16], png: false}\n");
+  // 30 steps miss the case's targets: --no-fail.
+  Outcome o = run_nfield({"bench", "--accuracy", "--no-fail", "--cases", "sdf_bunny", "--configs",
+                          (dir / "configs").string(), "--out", (dir / "out").string()},
+                         dir, dir / "capture");
+  ASSERT_EQ(o.code, 0) << describe(o);
+  const nlohmann::json metrics = read_json(dir / "out" / "sdf_bunny" / "metrics.json");
+  const nlohmann::json row = last_case_row(o.out);
+  for (const char* key : {"sign_accuracy", "sign_accuracy_band"}) {
+    ASSERT_TRUE(metrics[key].is_number()) << key;
+    EXPECT_EQ(row[key].get<double>(), metrics[key].get<double>()) << key;
+  }
+  EXPECT_LT(o.out.find("sign_accuracy_band"), o.out.rfind("{\"case\"")) << "the table has its row";
 }
 
 // nfield bench --nerf in a tiny setting on the shipped bunny config: the JSON line carries

@@ -10,6 +10,7 @@
 // integral field, and it is kept in checkpoints.
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -23,6 +24,7 @@
 #include "io/png_image.h"
 #include "solvers/problems/section_sampler.h"
 #include "solvers/run.h"
+#include "tests/testing/best_constant.h"
 #include "tests/testing/config_errors.h"
 #include "tests/testing/ray_residual_checks.h"
 #include "tests/testing/scratch.h"
@@ -342,7 +344,9 @@ TEST(SectionSampler, LearnsToEncloseAThinSlab) {
   const double before = sampler.loss_and_gradient(rays, truth, background, field, density, 1, unused).loss;
   for (int step = 0; step < 300; ++step) sampler.update(rays, truth, background, field, density, 1);
   const double after = sampler.loss_and_gradient(rays, truth, background, field, density, 1, unused).loss;
-  // Equal sections: 3.0e-2; after 300 steps 3.0e-6, the boundaries at x = 0.046 and 0.254.
+  std::printf("rendering error %.3e -> %.3e: %.0f-fold\n", before, after, before / after);
+  // Equal sections: 3.0e-2; after 300 steps 3.0e-6 (10,169-fold on 2026-11-26, too close to
+  // 10⁴ to assert), the boundaries at x = 0.046 and 0.254.
   EXPECT_LT(after, 1e-3 * before) << "before " << before;
   // A section now lies close around the slab (x = t − 1 along these rays).
   const Eigen::MatrixXd t = sampler.boundaries(rays);
@@ -420,7 +424,10 @@ TEST(AutointNerf, ShortTrainingLowersTheLossAndRendersTestViews) {
   EXPECT_LT(trained, 0.5 * first) << "first step " << first;
   std::ifstream in(dir / "trained/metrics.json");
   const auto metrics = nlohmann::json::parse(in);
-  EXPECT_GT(metrics["psnr_mean"].get<double>(), 13.0);
+  const double constant = testutil::best_constant_psnr_mean(kBunny / "transforms_test.json");
+  std::printf("test views: PSNR %.2f dB, best constant %.2f dB\n", metrics["psnr_mean"].get<double>(), constant);
+  // 16.63 dB over a best constant of 13.96 dB in a 2-thread run (2.7 dB).
+  EXPECT_GT(metrics["psnr_mean"].get<double>(), constant + 1.5);
   EXPECT_EQ(metrics["field_evaluations_per_ray"].get<double>(), 9.0);
   EXPECT_GT(metrics["render_ms_mean"].get<double>(), 0.0);
   for (const char* suffix : {"render", "truth", "error", "depth", "opacity"})
@@ -444,7 +451,10 @@ TEST(AutointNerf, SamplingNetworkTrainsBesideTheFieldAndRendersFromTheCheckpoint
   EXPECT_EQ(metrics["sampling_network"].get<double>(), 1.0);
   EXPECT_GT(metrics["sampler_parameters"].get<double>(), 1000.0);
   EXPECT_GT(metrics["sampler_max_section_share"].get<double>(), 1.0);
-  EXPECT_GT(metrics["psnr_mean"].get<double>(), 13.0);
+  const double constant = testutil::best_constant_psnr_mean(kBunny / "transforms_test.json");
+  std::printf("test views: PSNR %.2f dB, best constant %.2f dB\n", metrics["psnr_mean"].get<double>(), constant);
+  // 16.58 dB over 13.96 dB in a 2-thread run (2.6 dB).
+  EXPECT_GT(metrics["psnr_mean"].get<double>(), constant + 1.5);
   EXPECT_TRUE(io::H5Reader(dir / "run/checkpoint.h5").has_group("sampler"));
   // `nfield render` of the test poses from the checkpoint gives the run's own PSNR: the
   // sampling network came back with the field.

@@ -253,8 +253,10 @@ output: {grid: [8, 8]}
     return psnr;
   };
   const double energy = psnr_of("energy, stream_function: true"), residual = psnr_of("residual");
+  // 28.1 dB against 3.5 dB (2026-11-26). What the forms' weights promise is the gap, not the
+  // residual form's figure, which a better field or schedule may raise.
   EXPECT_GT(energy, 25.0);
-  EXPECT_LT(residual, 20.0);
+  EXPECT_GT(energy, residual + 10.0);
 }
 
 // ~2 s: camera.png averaged down by 8 (64 × 64) from its gradient only.
