@@ -24,20 +24,11 @@
 namespace nfield::apps::testing {
 namespace {
 
-std::string poisson_config(const std::string& training) {
-  return "problem: poisson\n"
-         "domain: {lower: [0, 0], upper: [1, 1]}\n"
-         "equation:\n"
-         "  source: \"-2*pi^2*sin(pi*x)*sin(pi*y)\"\n"
-         "  exact: \"sin(pi*x)*sin(pi*y)\"\n"
-         "conditions:\n"
-         "  - {on: boundary, type: dirichlet, value: \"0\"}\n"
-         "field: {type: siren, hidden: [16, 16], first_omega: 3, hidden_omega: 1}\n"
-         "training:\n"
-         "  threads: 1\n"
-         "  batch: {interior: 64, boundary: 32}\n"
-         "  log_every: 1\n" +
-         training + "output: {grid: [9, 9], png: false}\n";
+// The unit square's Poisson problem, small and on one thread, with the given stages.
+std::string unit_square_poisson(const std::string& training) {
+  return poisson_config("{lower: [0, 0], upper: [1, 1]}",
+                        "  threads: 1\n  batch: {interior: 64, boundary: 32}\n  log_every: 1\n" + training,
+                        "{grid: [9, 9], png: false}");
 }
 
 nlohmann::json read_json(const std::filesystem::path& path) { return nlohmann::json::parse(read_text(path)); }
@@ -56,7 +47,7 @@ void expect_finite_field(const std::filesystem::path& checkpoint) {
 // finished: false, and keeps (and evaluates) the last finite parameters.
 TEST(DivergenceTest, StopsAtTheFirstNonFiniteStepAndKeepsTheLastFiniteState) {
   const auto dir = scratch_dir();
-  write_text(dir / "p.yaml", poisson_config("  stages:\n    - {optimizer: adam, steps: 200, lr: 1.0e30}\n"
+  write_text(dir / "p.yaml", unit_square_poisson("  stages:\n    - {optimizer: adam, steps: 200, lr: 1.0e30}\n"
                                             "    - {optimizer: lbfgs, steps: 10}\n"));
   const Outcome o = run_nfield({"run", (dir / "p.yaml").string(), "--out", (dir / "out").string()}, dir,
                                dir / "capture");
@@ -96,7 +87,7 @@ TEST(DivergenceTest, StopsAtTheFirstNonFiniteStepAndKeepsTheLastFiniteState) {
 TEST(DivergenceTest, RestoreAndHalveRetriesABoundedNumberOfTimes) {
   const auto dir = scratch_dir();
   const std::string stage = "  stages:\n    - {optimizer: adam, steps: 40, lr: 1.0e30}\n";
-  write_text(dir / "three.yaml", poisson_config("  on_divergence: restore_and_halve_lr\n" + stage));
+  write_text(dir / "three.yaml", unit_square_poisson("  on_divergence: restore_and_halve_lr\n" + stage));
   Outcome o = run_nfield({"run", (dir / "three.yaml").string(), "--out", (dir / "three").string()}, dir,
                          dir / "capture");
   ASSERT_EQ(o.code, 3) << describe(o);
@@ -105,7 +96,7 @@ TEST(DivergenceTest, RestoreAndHalveRetriesABoundedNumberOfTimes) {
   EXPECT_EQ(o.out.find("retry 4"), std::string::npos) << o.out;
 
   write_text(dir / "many.yaml",
-             poisson_config("  on_divergence: restore_and_halve_lr\n  divergence_retries: 100\n" + stage));
+             unit_square_poisson("  on_divergence: restore_and_halve_lr\n  divergence_retries: 100\n" + stage));
   o = run_nfield({"run", (dir / "many.yaml").string(), "--out", (dir / "many").string()}, dir, dir / "capture");
   ASSERT_EQ(o.code, 0) << describe(o);
   const nlohmann::json m = read_json(dir / "many" / "metrics.json");
@@ -160,7 +151,7 @@ TEST(EarlyStopTest, AStageThatEndsEarlyIsReportedAsItHappened) {
 // datasets of every other, and a run resumes from it.
 TEST(CrashSafetyTest, KilledWhileCheckpointingLeavesAWholeCheckpoint) {
   const auto dir = scratch_dir();
-  write_text(dir / "p.yaml", poisson_config("  checkpoint_every: 1\n  stages:\n"
+  write_text(dir / "p.yaml", unit_square_poisson("  checkpoint_every: 1\n  stages:\n"
                                             "    - {optimizer: adam, steps: 100000, lr: 1.0e-3}\n"));
   std::mt19937 random(2026);
   std::uniform_int_distribution<int> wait_us(0, 200000);

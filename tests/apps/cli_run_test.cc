@@ -27,20 +27,6 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-std::string poisson_config(const std::string& domain, const std::string& training,
-                           const std::string& output) {
-  return "problem: poisson\n"
-         "domain: " + domain + "\n"
-         "equation:\n"
-         "  source: \"-2*pi^2*sin(pi*x)*sin(pi*y)\"\n"
-         "  exact: \"sin(pi*x)*sin(pi*y)\"\n"
-         "conditions:\n"
-         "  - {on: boundary, type: dirichlet, value: \"0\"}\n"
-         "field: {type: siren, hidden: [16, 16], first_omega: 3, hidden_omega: 1}\n"
-         "training:\n" + training +
-         "output: " + output + "\n";
-}
-
 nlohmann::json read_json(const std::filesystem::path& path) {
   return nlohmann::json::parse(read_text(path));
 }

@@ -57,6 +57,22 @@ inline std::vector<std::string> tree(const std::filesystem::path& dir) {
   return names;
 }
 
+// A small Poisson config (u* = sin πx sin πy, a 16 x 16 SIREN) with the given `domain`, lines
+// of `training:` and `output:`.
+inline std::string poisson_config(const std::string& domain, const std::string& training,
+                                  const std::string& output) {
+  return "problem: poisson\n"
+         "domain: " + domain + "\n"
+         "equation:\n"
+         "  source: \"-2*pi^2*sin(pi*x)*sin(pi*y)\"\n"
+         "  exact: \"sin(pi*x)*sin(pi*y)\"\n"
+         "conditions:\n"
+         "  - {on: boundary, type: dirichlet, value: \"0\"}\n"
+         "field: {type: siren, hidden: [16, 16], first_omega: 3, hidden_omega: 1}\n"
+         "training:\n" + training +
+         "output: " + output + "\n";
+}
+
 struct Outcome {
   int code = -1;        // exit status; 128 + N when killed by signal N
   bool signaled = false;
