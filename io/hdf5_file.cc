@@ -240,6 +240,23 @@ struct H5Writer::Impl {
           "cannot write attribute '" + attribute + "'");
   }
 
+  // UTF-8 variable-length strings: a scalar when `scalar`, else a 1-D array.
+  void write_strings(std::string_view object, std::string_view name,
+                     std::span<const std::string> values, bool scalar) {
+    Id type = checked(H5Tcopy(H5T_C_S1), H5Tclose, path, "cannot create string type");
+    check(H5Tset_size(type.get(), H5T_VARIABLE), path, "cannot create string type");
+    check(H5Tset_cset(type.get(), H5T_CSET_UTF8), path, "cannot create string type");
+    const hsize_t dims[1] = {values.size()};
+    Id space = scalar ? checked(H5Screate(H5S_SCALAR), H5Sclose, path, "cannot create space")
+                      : checked(H5Screate_simple(1, dims, nullptr), H5Sclose, path,
+                                "cannot create space");
+    std::vector<const char*> pointers;
+    for (const std::string& value : values) pointers.push_back(value.c_str());
+    static const char* const nothing = "";
+    write_attribute(object, name, type.get(), type.get(), space.get(),
+                    pointers.empty() ? &nothing : pointers.data());
+  }
+
   void write_numbers(std::string_view object, std::string_view name, H5Type type,
                      const void* data, std::size_t count, bool scalar) {
     const hsize_t dims[1] = {count};
@@ -315,14 +332,13 @@ void H5Writer::create_group(std::string_view name) {
 
 void H5Writer::write_attribute(std::string_view object, std::string_view name,
                                std::string_view value) {
-  const std::filesystem::path& file = impl_->path;
-  Id type = checked(H5Tcopy(H5T_C_S1), H5Tclose, file, "cannot create string type");
-  check(H5Tset_size(type.get(), H5T_VARIABLE), file, "cannot create string type");
-  check(H5Tset_cset(type.get(), H5T_CSET_UTF8), file, "cannot create string type");
-  Id space = checked(H5Screate(H5S_SCALAR), H5Sclose, file, "cannot create space");
   const std::string text(value);
-  const char* pointer = text.c_str();
-  impl_->write_attribute(object, name, type.get(), type.get(), space.get(), &pointer);
+  impl_->write_strings(object, name, std::span<const std::string>(&text, 1), true);
+}
+
+void H5Writer::write_attribute(std::string_view object, std::string_view name,
+                               std::span<const std::string> values) {
+  impl_->write_strings(object, name, values, false);
 }
 
 void H5Writer::write_attribute(std::string_view object, std::string_view name, double value) {
@@ -455,27 +471,42 @@ struct H5Reader::Impl {
     return values;
   }
 
-  std::string read_string(std::string_view object, std::string_view name) const {
+  // A string attribute, variable-length or fixed-length (h5py's str and numpy's S types):
+  // exactly one string when `single`, else a 1-D array of them (or one).
+  std::vector<std::string> read_strings(std::string_view object, std::string_view name,
+                                        bool single) const {
     std::string label;
     Id attribute = open_attribute(object, name, &label);
     Id type = checked(H5Aget_type(attribute.get()), H5Tclose, path, "cannot read " + label);
-    if (H5Tget_class(type.get()) != H5T_STRING) error(label + " is not a string");
+    if (H5Tget_class(type.get()) != H5T_STRING)
+      error(label + " is not " + (single ? "a string" : "a string or a list of strings"));
     Id space = checked(H5Aget_space(attribute.get()), H5Sclose, path, "cannot read " + label);
-    if (H5Sget_simple_extent_npoints(space.get()) != 1)
-      error(label + " holds several strings, expected one");
+    const hssize_t count = H5Sget_simple_extent_npoints(space.get());
+    if (count < 0) fail(path, "cannot read " + label);
+    if (single && count != 1) error(label + " holds several strings, expected one");
+    const auto n = static_cast<std::size_t>(count);
     Id memory = checked(H5Tcopy(type.get()), H5Tclose, path, "cannot read " + label);
+    std::vector<std::string> out;
+    if (n == 0) return out;
     if (H5Tis_variable_str(type.get()) > 0) {
-      char* text = nullptr;
-      check(H5Aread(attribute.get(), memory.get(), &text), path, "cannot read " + label);
-      std::string out = text ? text : "";
-      H5free_memory(text);
+      std::vector<char*> texts(n, nullptr);
+      const herr_t status = H5Aread(attribute.get(), memory.get(), texts.data());
+      for (char* text : texts) {
+        out.emplace_back(text ? text : "");
+        H5free_memory(text);
+      }
+      check(status, path, "cannot read " + label);
       return out;
     }
-    std::string out(H5Tget_size(type.get()), '\0');
-    check(H5Aread(attribute.get(), memory.get(), out.data()), path, "cannot read " + label);
-    out.erase(std::find(out.begin(), out.end(), '\0'), out.end());
-    if (H5Tget_strpad(type.get()) == H5T_STR_SPACEPAD)
-      out.erase(out.find_last_not_of(' ') + 1);
+    const std::size_t size = H5Tget_size(type.get());
+    std::string buffer(size * n, '\0');
+    check(H5Aread(attribute.get(), memory.get(), buffer.data()), path, "cannot read " + label);
+    for (std::size_t i = 0; i < n; ++i) {
+      std::string text = buffer.substr(i * size, size);
+      text.erase(std::find(text.begin(), text.end(), '\0'), text.end());
+      if (H5Tget_strpad(type.get()) == H5T_STR_SPACEPAD) text.erase(text.find_last_not_of(' ') + 1);
+      out.push_back(std::move(text));
+    }
     return out;
   }
 };
@@ -589,7 +620,9 @@ std::vector<std::string> H5Reader::attribute_names(std::string_view object) cons
 template <class T>
 T H5Reader::read_attribute(std::string_view object, std::string_view name) const {
   if constexpr (std::is_same_v<T, std::string>)
-    return impl_->read_string(object, name);
+    return impl_->read_strings(object, name, true).front();
+  else if constexpr (std::is_same_v<T, std::vector<std::string>>)
+    return impl_->read_strings(object, name, false);
   else if constexpr (std::is_same_v<T, double> || std::is_same_v<T, std::int64_t>)
     return impl_->read_numbers<T>(object, name, true).front();
   else
@@ -598,6 +631,8 @@ T H5Reader::read_attribute(std::string_view object, std::string_view name) const
 
 template std::string H5Reader::read_attribute<std::string>(std::string_view,
                                                            std::string_view) const;
+template std::vector<std::string> H5Reader::read_attribute<std::vector<std::string>>(
+    std::string_view, std::string_view) const;
 template double H5Reader::read_attribute<double>(std::string_view, std::string_view) const;
 template std::int64_t H5Reader::read_attribute<std::int64_t>(std::string_view,
                                                              std::string_view) const;

@@ -97,6 +97,13 @@ class H5Writer {
                        std::span<const double> values);
   void write_attribute(std::string_view object, std::string_view name,
                        std::span<const std::int64_t> values);
+  // A 1-D array of UTF-8 strings (a list of str in h5py), e.g. the names of a table's columns.
+  void write_attribute(std::string_view object, std::string_view name,
+                       std::span<const std::string> values);
+  void write_attribute(std::string_view object, std::string_view name,
+                       const std::vector<std::string>& values) {
+    write_attribute(object, name, std::span<const std::string>(values));
+  }
   template <std::integral T>
     requires(!std::is_same_v<T, bool> && !std::is_same_v<T, std::int64_t>)
   void write_attribute(std::string_view object, std::string_view name, T value) {
@@ -144,8 +151,10 @@ class H5Reader {
   Eigen::Matrix<T, Eigen::Dynamic, 1> read_vector(std::string_view name) const;
 
   // Attributes of "/" (the file), a dataset or a group. T is one of std::string, double,
-  // std::int64_t, std::vector<double>, std::vector<std::int64_t>; a double may be read
-  // from an integer attribute, not the other way round.
+  // std::int64_t, std::vector<double>, std::vector<std::int64_t>, std::vector<std::string>;
+  // a double may be read from an integer attribute, not the other way round. Strings may be
+  // stored variable- or fixed-length (h5py's str, numpy's S); a vector<string> is also read
+  // from a single string (as one element).
   bool has_attribute(std::string_view object, std::string_view name) const;
   std::vector<std::string> attribute_names(std::string_view object) const;
   template <class T>

@@ -10,6 +10,7 @@
 #include <random>
 
 #include <gtest/gtest.h>
+#include <hdf5.h>
 
 namespace nfield::io {
 namespace {
@@ -169,6 +170,52 @@ TEST(H5File, Attributes) {
                name + ": attribute 'loss' of '/' is not a string");
   expect_error([&] { in.read_attribute<double>("nothing", "x"); },
                name + ": no dataset or group 'nothing'");
+}
+
+// Lists of strings (the names of a table's columns): written as h5py writes a list of str,
+// read back from that, from numpy's fixed-length S arrays (written here with the C API, as
+// h5py stores np.array([b"x", b"u"])), and from a single string.
+TEST(H5File, StringListAttributes) {
+  const fs::path file = scratch() / "strings.h5";
+  const std::vector<std::string> names = {"x", "y", "u (m) @ t=0.5", ""};
+  {
+    H5Writer out(file);
+    out.write("table", Eigen::MatrixXd::Zero(2, 4));
+    out.write_attribute("table", "columns", names);
+    out.write_attribute("table", "none", std::vector<std::string>{});
+    out.write_attribute("table", "one", "x,y");
+    out.commit();
+  }
+  {  // a fixed-length, null-padded array of 3-byte strings
+    const hid_t h5 = H5Fopen(file.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    const hid_t dataset = H5Dopen2(h5, "table", H5P_DEFAULT);
+    const hid_t type = H5Tcopy(H5T_C_S1);
+    H5Tset_size(type, 3);
+    H5Tset_strpad(type, H5T_STR_NULLPAD);
+    const hsize_t dims[1] = {3};
+    const hid_t space = H5Screate_simple(1, dims, nullptr);
+    const hid_t attribute = H5Acreate2(dataset, "fixed", type, space, H5P_DEFAULT, H5P_DEFAULT);
+    const char bytes[9] = {'x', 0, 0, 'y', 'y', 0, 'u', 'v', 'w'};
+    ASSERT_GE(H5Awrite(attribute, type, bytes), 0);
+    H5Aclose(attribute);
+    H5Sclose(space);
+    H5Tclose(type);
+    H5Dclose(dataset);
+    ASSERT_GE(H5Fclose(h5), 0);
+  }
+  H5Reader in(file);
+  EXPECT_EQ(in.read_attribute<std::vector<std::string>>("table", "columns"), names);
+  EXPECT_TRUE(in.read_attribute<std::vector<std::string>>("table", "none").empty());
+  EXPECT_EQ(in.read_attribute<std::vector<std::string>>("table", "one"),
+            (std::vector<std::string>{"x,y"}));
+  EXPECT_EQ(in.read_attribute<std::vector<std::string>>("table", "fixed"),
+            (std::vector<std::string>{"x", "yy", "uvw"}));
+  EXPECT_EQ(in.read_attribute<std::string>("table", "one"), "x,y");
+  const std::string name = file.string();
+  expect_error([&] { in.read_attribute<std::string>("table", "columns"); },
+               name + ": attribute 'columns' of 'table' holds several strings, expected one");
+  expect_error([&] { in.read_attribute<std::vector<std::string>>("/", "missing"); },
+               name + ": no attribute 'missing' of '/'");
 }
 
 TEST(H5File, ErrorsNameFileAndDataset) {
