@@ -69,6 +69,8 @@
 //    index=False). Semicolon-separated "CSV" (some locales) is refused at the header.
 //  * Points printed with few digits may lie just outside the domain (3.1416 > π):
 //    require_inside_box refuses them unless given a tolerance that covers the rounding.
+//  * COMSOL writes NaN at grid points outside the geometry: such a table is refused; export
+//    at the mesh nodes, or drop those rows.
 //  * A dataset written column-major (MATLAB, Fortran) appears transposed, shape (columns,
 //    rows): refused with a hint rather than read as few long rows.
 //  * Text tables are read whole into memory: the file's bytes plus twice the values while

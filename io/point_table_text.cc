@@ -41,7 +41,12 @@ class Lines {
     return true;
   }
   int number() const { return number_; }
-  std::size_t size() const { return text_.size(); }
+  // Lines after the current one (at most): a bound on the rows still to come.
+  std::size_t remaining() const {
+    return pos_ >= text_.size()
+               ? 0
+               : static_cast<std::size_t>(std::count(text_.begin() + pos_, text_.end(), '\n')) + 1;
+  }
 
  private:
   std::string_view text_;
@@ -283,9 +288,9 @@ class Parser {
     split_row(line, dialect_, fields_);
     if (width_ == 0) {
       resolve_names(fields_.size(), number);
-      const std::size_t rows = lines_.size() / (line.size() + 1) + 1;  // a guess, to reserve
-      table_.values.reserve(rows * width_ + rows / 8 * width_);
-      table_.lines.reserve(rows + rows / 8);
+      const std::size_t rows = lines_.remaining() + 1;  // this row and those after it
+      table_.values.reserve(rows * width_);
+      table_.lines.reserve(rows);
     }
     if (fields_.size() != width_)
       fail(number, 0,
