@@ -60,7 +60,7 @@
 // byte where the field starts), either left out where unknown, e.g.
 //   plate.csv:7:9: field 2 (y): expected a number, got 'abc'
 //   plate.csv:9: 2 fields, but the header (line 3) names 3 columns: x, y, u
-//   plate.h5:/fields/u: row 17 (from 0), column 'u': nan
+//   plate.h5:/fields/u: row 17 (from 0), column 'u': nan; only finite numbers are accepted
 // A config reader puts its own location in front, so the user sees which key named the file:
 //   catch (const TableError& e) { throw node.error("file", e.what()); }
 //
