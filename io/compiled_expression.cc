@@ -1,0 +1,315 @@
+// SPDX-License-Identifier: MIT
+#include "io/compiled_expression.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cstdlib>
+#include <numbers>
+#include <stdexcept>
+
+namespace nfield::io {
+namespace {
+
+using Op = CompiledExpression::Op;
+using Instruction = CompiledExpression::Instruction;
+
+struct Function {
+  const char* name;
+  Op op;
+  int arity;
+};
+constexpr Function kFunctions[] = {
+    {"sin", Op::kSin, 1},   {"cos", Op::kCos, 1},   {"tan", Op::kTan, 1},   {"exp", Op::kExp, 1},
+    {"log", Op::kLog, 1},   {"sqrt", Op::kSqrt, 1}, {"abs", Op::kAbs, 1},   {"tanh", Op::kTanh, 1},
+    {"sinh", Op::kSinh, 1}, {"cosh", Op::kCosh, 1}, {"atan", Op::kAtan, 1}, {"min", Op::kMin, 2},
+    {"max", Op::kMax, 2},   {"pow", Op::kPow, 2},
+};
+
+const Function* find_function(std::string_view name) {
+  for (const Function& f : kFunctions)
+    if (name == f.name) return &f;
+  return nullptr;
+}
+
+bool identifier_start(char c) { return std::isalpha(static_cast<unsigned char>(c)) || c == '_'; }
+bool identifier_char(char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; }
+
+// A tree node: an operation on its children, a constant or a slot.
+struct Node {
+  Op op = Op::kConst;
+  std::vector<int> children;
+  double value = 0;
+  int slot = 0;
+};
+
+// Recursive descent over the grammar
+//   sum     := product (('+' | '-') product)*
+//   product := unary (('*' | '/') unary)*
+//   unary   := ('-' | '+') unary | power
+//   power   := primary ('^' unary)?             (right-associative through unary)
+//   primary := number | name | name '(' sum (',' sum)* ')' | '(' sum ')'
+class Parser {
+ public:
+  Parser(const std::string& text, const ExpressionScope& scope) : text_(text), scope_(scope) {}
+
+  int parse() {
+    const int root = sum();
+    skip_space();
+    if (at_ < text_.size()) fail(at_, "unexpected '" + std::string(1, text_[at_]) + "'");
+    return root;
+  }
+  const std::vector<Node>& nodes() const { return nodes_; }
+  const std::vector<SymbolUse>& symbols() const { return symbols_; }
+
+ private:
+  [[noreturn]] void fail(std::size_t position, const std::string& reason) const {
+    throw ExpressionError(text_, position, reason);
+  }
+  void skip_space() {
+    while (at_ < text_.size() && std::isspace(static_cast<unsigned char>(text_[at_]))) ++at_;
+  }
+  bool accept(char c) {
+    skip_space();
+    if (at_ < text_.size() && text_[at_] == c) {
+      ++at_;
+      return true;
+    }
+    return false;
+  }
+  int add(Node node) {
+    nodes_.push_back(std::move(node));
+    return static_cast<int>(nodes_.size()) - 1;
+  }
+  int binary(Op op, int a, int b) { return add(Node{op, {a, b}}); }
+
+  int sum() {
+    int left = product();
+    for (;;) {
+      if (accept('+')) left = binary(Op::kAdd, left, product());
+      else if (accept('-')) left = binary(Op::kSub, left, product());
+      else return left;
+    }
+  }
+  int product() {
+    int left = unary();
+    for (;;) {
+      if (accept('*')) left = binary(Op::kMul, left, unary());
+      else if (accept('/')) left = binary(Op::kDiv, left, unary());
+      else return left;
+    }
+  }
+  int unary() {
+    if (accept('-')) return add(Node{Op::kNeg, {unary()}});
+    if (accept('+')) return unary();
+    return power();
+  }
+  int power() {
+    const int base = primary();
+    if (accept('^')) return binary(Op::kPow, base, unary());
+    return base;
+  }
+
+  int primary() {
+    skip_space();
+    if (at_ >= text_.size()) fail(at_, text_.empty() ? "empty expression" : "unexpected end of expression");
+    const char c = text_[at_];
+    if (std::isdigit(static_cast<unsigned char>(c)) || c == '.') return number();
+    if (identifier_start(c)) return name();
+    if (accept('(')) {
+      const int inner = sum();
+      if (!accept(')')) fail(at_, "expected ')'");
+      return inner;
+    }
+    fail(at_, "unexpected '" + std::string(1, c) + "'");
+  }
+
+  int number() {
+    const std::size_t start = at_;
+    while (at_ < text_.size() && std::isdigit(static_cast<unsigned char>(text_[at_]))) ++at_;
+    if (at_ < text_.size() && text_[at_] == '.') ++at_;
+    while (at_ < text_.size() && std::isdigit(static_cast<unsigned char>(text_[at_]))) ++at_;
+    if (at_ == start + 1 && text_[start] == '.') fail(start, "expected a number");
+    // An exponent only when digits follow: `2e` is 2 followed by the name e.
+    if (at_ < text_.size() && (text_[at_] == 'e' || text_[at_] == 'E')) {
+      std::size_t k = at_ + 1;
+      if (k < text_.size() && (text_[k] == '+' || text_[k] == '-')) ++k;
+      if (k < text_.size() && std::isdigit(static_cast<unsigned char>(text_[k]))) {
+        at_ = k;
+        while (at_ < text_.size() && std::isdigit(static_cast<unsigned char>(text_[at_]))) ++at_;
+      }
+    }
+    const std::string digits = text_.substr(start, at_ - start);
+    return add(Node{Op::kConst, {}, std::strtod(digits.c_str(), nullptr)});
+  }
+
+  int name() {
+    const std::size_t start = at_;
+    while (at_ < text_.size() && identifier_char(text_[at_])) ++at_;
+    const std::string id = text_.substr(start, at_ - start);
+    const std::size_t after = at_;
+    skip_space();
+    if (at_ < text_.size() && text_[at_] == '(') {
+      if (const Function* f = find_function(id)) return call(*f, start);
+      if (std::optional<std::string> symbol = applied_name(id)) return lookup(*symbol, start, true);
+      fail(start, "unknown function '" + id + "' (functions: " + function_names() + ")");
+    }
+    at_ = after;
+    if (find_function(id)) fail(start, "function '" + id + "' needs its argument in parentheses");
+    return lookup(id, start, false);
+  }
+
+  // `name(arg)` with a bare name as the argument, as the one name "name(arg)" when the scope
+  // knows it; the parser stays at the '(' otherwise.
+  std::optional<std::string> applied_name(const std::string& id) {
+    const std::size_t open = at_;
+    ++at_;
+    skip_space();
+    const std::size_t arg_start = at_;
+    while (at_ < text_.size() && identifier_char(text_[at_])) ++at_;
+    const std::string arg = text_.substr(arg_start, at_ - arg_start);
+    if (!arg.empty() && identifier_start(arg[0]) && accept(')')) {
+      const std::string symbol = id + "(" + arg + ")";
+      if (known(symbol)) return symbol;
+    }
+    at_ = open;
+    return std::nullopt;
+  }
+
+  bool known(const std::string& symbol) const {
+    for (const auto& [n, slot] : scope_.slots)
+      if (n == symbol) return true;
+    if (!scope_.resolve) return false;
+    try {
+      return scope_.resolve(symbol).has_value();
+    } catch (const std::invalid_argument&) {
+      return true;  // known, with an error that lookup reports
+    }
+  }
+
+  int call(const Function& f, std::size_t start) {
+    accept('(');
+    std::vector<int> args{sum()};
+    while (accept(',')) args.push_back(sum());
+    if (!accept(')')) fail(at_, "expected ')' or ','");
+    if (static_cast<int>(args.size()) != f.arity)
+      fail(start, std::string(f.name) + " takes " + std::to_string(f.arity) + " argument" +
+                      (f.arity == 1 ? "" : "s") + ", got " + std::to_string(args.size()));
+    return add(Node{f.op, args});
+  }
+
+  int lookup(const std::string& id, std::size_t start, bool applied) {
+    if (!applied && id == "pi") return add(Node{Op::kConst, {}, std::numbers::pi});
+    if (!applied && id == "e") return add(Node{Op::kConst, {}, std::numbers::e});
+    std::optional<int> slot;
+    for (const auto& [n, s] : scope_.slots)
+      if (n == id) slot = s;
+    if (!slot)
+      for (const auto& [n, v] : scope_.constants)
+        if (n == id) return add(Node{Op::kConst, {}, v});
+    if (!slot && scope_.resolve) {
+      try {
+        slot = scope_.resolve(id);
+      } catch (const std::invalid_argument& e) {
+        fail(start, e.what());
+      }
+    }
+    if (!slot) fail(start, "unknown symbol '" + id + "' (" + valid_names() + ")");
+    const auto seen = std::find_if(symbols_.begin(), symbols_.end(), [&](const SymbolUse& s) { return s.name == id; });
+    if (seen == symbols_.end()) symbols_.push_back({id, *slot, start});
+    return add(Node{Op::kSlot, {}, 0, *slot});
+  }
+
+  std::string valid_names() const {
+    if (!scope_.valid_names.empty()) return scope_.valid_names;
+    std::string out;
+    for (const auto& [n, s] : scope_.slots) out += (out.empty() ? "" : ", ") + n;
+    for (const auto& [n, v] : scope_.constants) out += (out.empty() ? "" : ", ") + n;
+    return "valid: " + (out.empty() ? std::string("none") : out) + ", pi, e";
+  }
+  static std::string function_names() {
+    std::string out;
+    for (const Function& f : kFunctions) out += (out.empty() ? "" : ", ") + std::string(f.name);
+    return out;
+  }
+
+  const std::string& text_;
+  const ExpressionScope& scope_;
+  std::size_t at_ = 0;
+  std::vector<Node> nodes_;
+  std::vector<SymbolUse> symbols_;
+};
+
+// Emits the tree below `node` onto the tape, folding constant subtrees; returns the register
+// holding its value.
+class Compiler {
+ public:
+  explicit Compiler(const std::vector<Node>& nodes) : nodes_(nodes) {}
+  std::vector<Instruction> take() { return std::move(tape_); }
+
+  int emit(int index) {
+    const Node& node = nodes_[static_cast<std::size_t>(index)];
+    if (node.op == Op::kConst) return constant(node.value);
+    if (node.op == Op::kSlot) return push({Op::kSlot, -1, -1, node.slot, 0});
+    const int a = emit(node.children[0]);
+    const int b = node.children.size() > 1 ? emit(node.children[1]) : -1;
+    if (node.op == Op::kPow && tape_[static_cast<std::size_t>(b)].op == Op::kConst) {
+      const double exponent = tape_[static_cast<std::size_t>(b)].value;
+      tape_.pop_back();  // the exponent's constant, emitted last
+      if (exponent == std::round(exponent) && std::abs(exponent) <= 64)
+        return fold_or_push({Op::kPowInt, a, -1, static_cast<int>(exponent), 0});
+      return fold_or_push({Op::kPowConst, a, -1, 0, exponent});
+    }
+    return fold_or_push({node.op, a, b, 0, 0});
+  }
+
+ private:
+  int push(Instruction in) {
+    tape_.push_back(in);
+    return static_cast<int>(tape_.size()) - 1;
+  }
+  int constant(double value) { return push({Op::kConst, -1, -1, 0, value}); }
+
+  // An instruction whose operands are all constants becomes one constant (the operands,
+  // the last registers emitted, are dropped).
+  int fold_or_push(Instruction in) {
+    const bool a_const = tape_[static_cast<std::size_t>(in.a)].op == Op::kConst;
+    const bool b_const = in.b < 0 || tape_[static_cast<std::size_t>(in.b)].op == Op::kConst;
+    if (!a_const || !b_const) return push(in);
+    const double a = tape_[static_cast<std::size_t>(in.a)].value;
+    const double b = in.b < 0 ? a : tape_[static_cast<std::size_t>(in.b)].value;
+    const double value = CompiledExpression::apply<double>(in, a, b);
+    tape_.resize(static_cast<std::size_t>(std::min(in.a, in.b < 0 ? in.a : in.b)));
+    return constant(value);
+  }
+
+  const std::vector<Node>& nodes_;
+  std::vector<Instruction> tape_;
+};
+
+}  // namespace
+
+CompiledExpression::CompiledExpression(std::string text, const ExpressionScope& scope)
+    : text_(std::move(text)) {
+  Parser parser(text_, scope);
+  const int root = parser.parse();
+  Compiler compiler(parser.nodes());
+  compiler.emit(root);
+  tape_ = compiler.take();
+  symbols_ = parser.symbols();
+}
+
+std::vector<int> CompiledExpression::reads() const {
+  std::vector<int> slots;
+  for (const SymbolUse& s : symbols_) slots.push_back(s.slot);
+  std::sort(slots.begin(), slots.end());
+  slots.erase(std::unique(slots.begin(), slots.end()), slots.end());
+  return slots;
+}
+
+int CompiledExpression::row_size() const {
+  int size = 0;
+  for (const SymbolUse& s : symbols_) size = std::max(size, s.slot + 1);
+  return size;
+}
+
+}  // namespace nfield::io
