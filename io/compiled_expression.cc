@@ -60,6 +60,7 @@ class Parser {
   }
   const std::vector<Node>& nodes() const { return nodes_; }
   const std::vector<SymbolUse>& symbols() const { return symbols_; }
+  const std::vector<std::string>& constants_read() const { return constants_read_; }
 
  private:
   [[noreturn]] void fail(std::size_t position, const std::string& reason) const {
@@ -205,7 +206,11 @@ class Parser {
       if (n == id) slot = s;
     if (!slot)
       for (const auto& [n, v] : scope_.constants)
-        if (n == id) return add(Node{Op::kConst, {}, v});
+        if (n == id) {
+          if (std::find(constants_read_.begin(), constants_read_.end(), id) == constants_read_.end())
+            constants_read_.push_back(id);
+          return add(Node{Op::kConst, {}, v});
+        }
     if (!slot && scope_.resolve) {
       try {
         slot = scope_.resolve(id);
@@ -237,6 +242,7 @@ class Parser {
   std::size_t at_ = 0;
   std::vector<Node> nodes_;
   std::vector<SymbolUse> symbols_;
+  std::vector<std::string> constants_read_;
 };
 
 // Emits the tree below `node` onto the tape, folding constant subtrees; returns the register
@@ -296,6 +302,7 @@ CompiledExpression::CompiledExpression(std::string text, const ExpressionScope& 
   compiler.emit(root);
   tape_ = compiler.take();
   symbols_ = parser.symbols();
+  constants_read_ = parser.constants_read();
 }
 
 std::vector<int> CompiledExpression::reads() const {

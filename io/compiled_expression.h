@@ -105,6 +105,8 @@ class CompiledExpression {
 
   const std::string& text() const { return text_; }
   const std::vector<SymbolUse>& symbols() const { return symbols_; }
+  // The scope's constants it reads (folded into the tape), in order of first appearance.
+  const std::vector<std::string>& constants_read() const { return constants_read_; }
   // Sorted distinct slots the expression reads (after folding: x − x still reads x).
   std::vector<int> reads() const;
   bool is_constant() const { return symbols_.empty(); }
@@ -121,6 +123,7 @@ class CompiledExpression {
   std::string text_;
   std::vector<Instruction> tape_;
   std::vector<SymbolUse> symbols_;
+  std::vector<std::string> constants_read_;
 };
 
 // x^k by repeated squaring: exact for small k in double, and no log(x) in a Jet.

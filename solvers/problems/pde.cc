@@ -25,6 +25,7 @@
 // lap(u), bilap(u)); each residual asks the field for exactly the streams of the symbols it
 // reads, and its adjoint comes from ceres::Jet (solvers/problems/pde_residual.h).
 //
+// A constant no expression reads is an error (a typo, as an unknown key is).
 // Limits: a residual reads at most 32 symbols; hard conditions (enforce: hard) take no
 // residual of order above 2; the condition values and `domain` do not see `constants`
 // (they are muparser expressions over the variables, io/expression.h).
@@ -94,6 +95,10 @@ class Pde final : public Problem {
       conditions_ = condition_terms(root.child("conditions"), domain_, output_dim(), &ansatz_);
     check_terms();
     if (root.has("reference")) read_reference(root.child("reference"));
+    for (const auto& [name, value] : constants_)
+      if (!contains(constants_used_, name))
+        throw root.child("constants").error(name, "constant '" + name + "' is never used (by a residual, "
+                                                  "reference.exact or another constant)");
   }
 
   const Domain& domain() const override { return domain_; }
@@ -172,12 +177,18 @@ class Pde final : public Problem {
         const io::CompiledExpression e(node.get<std::string>(name), scope);
         std::vector<double> scratch;
         const double value = e.evaluate<double>(nullptr, scratch);
+        note_constants(e);
         node.require(name, std::isfinite(value), "constant '" + name + "' is not finite");
         constants_.emplace_back(name, value);
       } catch (const io::ExpressionError& e) {
         throw node.expression_error(name, e);
       }
     }
+  }
+
+  void note_constants(const io::CompiledExpression& e) {
+    for (const std::string& name : e.constants_read())
+      if (!contains(constants_used_, name)) constants_used_.push_back(name);
   }
 
   std::string constant_names() const {
@@ -229,6 +240,7 @@ class Pde final : public Problem {
     };
     try {
       r.expression = std::make_shared<const io::CompiledExpression>(text, s);
+      note_constants(*r.expression);
     } catch (const io::ExpressionError& e) {
       throw item.is_map() ? item.expression_error("expr", e) : item.expression_error(e);
     }
@@ -285,7 +297,9 @@ class Pde final : public Problem {
     const io::ExpressionScope s = scope(false);
     auto compile = [&](const io::ConfigNode& parent, const std::string& key) {
       try {
-        return io::CompiledExpression(parent.get<std::string>(key), s);
+        io::CompiledExpression e(parent.get<std::string>(key), s);
+        note_constants(e);
+        return e;
       } catch (const io::ExpressionError& e) {
         throw parent.expression_error(key, e);
       }
@@ -310,6 +324,7 @@ class Pde final : public Problem {
   Domain domain_;
   std::vector<std::string> outputs_;
   std::vector<std::pair<std::string, double>> constants_;
+  std::vector<std::string> constants_used_;
   std::vector<ResidualSpec> residuals_;
   std::vector<LossTerm> conditions_;
   std::shared_ptr<const Ansatz> ansatz_;

@@ -109,7 +109,8 @@ TEST(CompiledExpression, NumbersConstantsAndPrecedence) {
       {"nu * 2", 0.02},       {"pow(2, 10)", 1024},  {"min(3, -1)", -1},   {"max(3, -1)", 3},
   };
   ExpressionScope scope;
-  scope.constants = {{"nu", 0.01}};
+  scope.constants = {{"nu", 0.01}, {"mu", 2}};
+  EXPECT_EQ(CompiledExpression("nu * 2 + nu - pi", scope).constants_read(), std::vector<std::string>{"nu"});
   std::vector<double> scratch;
   for (const Literal& l : literals) {
     SCOPED_TRACE(l.text);

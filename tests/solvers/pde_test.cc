@@ -354,6 +354,8 @@ TEST(Pde, ConfigErrorsAreLocated) {
                        {3, 10, "outputs", "output name 'x' is taken"});
   expect_located_error(write_config("reference", with("u_xq", "u_x") + "reference: {exact: {u: \"x\", w: \"t\"}}\n"),
                        {9, 32, "reference.exact.w", "'w' is no output (outputs: u, v)"});
+  expect_located_error(write_config("unused_constant", with("u_xq", "u_x")),
+                       {4, 36, "constants.two_nu", "constant 'two_nu' is never used"});
   expect_located_error(write_config("unknown_function", with("u_xq", "grad(u)")),
                        {8, 14, "equation.residuals[1]", "unknown function 'grad'"});
   expect_located_error(write_config("hard_taylor", with("u_xq", "u_xxx") +
