@@ -40,6 +40,7 @@ struct Node {
   std::vector<int> children;
   double value = 0;
   int slot = 0;
+  int symbol = -1;  // kSlot: index into Parser::symbols()
 };
 
 // Recursive descent over the grammar
@@ -219,10 +220,31 @@ class Parser {
       }
     }
     if (!slot) fail(start, "unknown symbol '" + id + "' (" + valid_names() + ")");
-    const auto seen = std::find_if(symbols_.begin(), symbols_.end(), [&](const SymbolUse& s) { return s.name == id; });
-    if (seen == symbols_.end()) symbols_.push_back({id, *slot, start});
-    return add(Node{Op::kSlot, {}, 0, *slot});
+    return slot_node(id, *slot, start);
   }
+
+ public:
+  // A node reading `slot` as the symbol `id`.
+  int slot_node(const std::string& id, int slot, std::size_t start) {
+    auto seen = std::find_if(symbols_.begin(), symbols_.end(), [&](const SymbolUse& s) { return s.name == id; });
+    if (seen == symbols_.end()) seen = symbols_.insert(symbols_.end(), {id, slot, start});
+    return add(Node{Op::kSlot, {}, 0, slot, static_cast<int>(seen - symbols_.begin())});
+  }
+  // The slot of a name the scope lists or resolves; nullopt when it does not.
+  std::optional<int> slot_for(const std::string& id) const {
+    for (const auto& [n, s] : scope_.slots)
+      if (n == id) return s;
+    if (!scope_.resolve) return std::nullopt;
+    try {
+      return scope_.resolve(id);
+    } catch (const std::invalid_argument&) {
+      return std::nullopt;
+    }
+  }
+  std::vector<Node>& nodes() { return nodes_; }
+  std::vector<SymbolUse>& symbols() { return symbols_; }
+
+ private:
 
   std::string valid_names() const {
     if (!scope_.valid_names.empty()) return scope_.valid_names;
@@ -245,6 +267,69 @@ class Parser {
   std::vector<std::string> constants_read_;
 };
 
+// The terms of a chain of + and − (through unary −) with their signs.
+void flatten(const std::vector<Node>& nodes, int index, int sign, std::vector<std::pair<int, int>>& terms) {
+  const Node& node = nodes[static_cast<std::size_t>(index)];
+  if (node.op == Op::kAdd || node.op == Op::kSub) {
+    flatten(nodes, node.children[0], sign, terms);
+    flatten(nodes, node.children[1], node.op == Op::kSub ? -sign : sign, terms);
+  } else if (node.op == Op::kNeg) {
+    flatten(nodes, node.children[0], -sign, terms);
+  } else {
+    terms.emplace_back(index, sign);
+  }
+}
+
+// Replaces the terms of one alias in a chain when all are there, with one sign, and read
+// nowhere else: the first becomes the alias, the others 0 (dropped when compiled).
+void replace_alias(Parser& parser, const std::vector<std::pair<int, int>>& terms, const SumAlias& alias,
+                   const std::vector<int>& uses) {
+  std::vector<Node>& nodes = parser.nodes();
+  std::vector<int> found;
+  int sign = 0;
+  for (const std::string& name : alias.terms) {
+    const auto term = std::find_if(terms.begin(), terms.end(), [&](const std::pair<int, int>& t) {
+      const Node& n = nodes[static_cast<std::size_t>(t.first)];
+      return n.op == Op::kSlot && n.symbol >= 0 && parser.symbols()[static_cast<std::size_t>(n.symbol)].name == name;
+    });
+    if (term == terms.end()) return;
+    const int symbol = nodes[static_cast<std::size_t>(term->first)].symbol;
+    if (uses[static_cast<std::size_t>(symbol)] != 1 || (sign != 0 && term->second != sign)) return;
+    sign = term->second;
+    found.push_back(term->first);
+  }
+  const std::optional<int> slot = parser.slot_for(alias.name);
+  if (found.empty() || !slot) return;
+  const std::size_t position = parser.symbols()[static_cast<std::size_t>(nodes[static_cast<std::size_t>(found[0])].symbol)].position;
+  const int replacement = parser.slot_node(alias.name, *slot, position);
+  nodes[static_cast<std::size_t>(found[0])] = nodes[static_cast<std::size_t>(replacement)];
+  for (std::size_t k = 1; k < found.size(); ++k) nodes[static_cast<std::size_t>(found[k])] = Node{Op::kConst, {}, 0.0};
+}
+
+// Counts the reads of each symbol below `index` (uses) and applies the aliases to every
+// chain of + and −.
+void count_uses(const std::vector<Node>& nodes, int index, std::vector<int>& uses) {
+  const Node& node = nodes[static_cast<std::size_t>(index)];
+  if (node.op == Op::kSlot && node.symbol >= 0) ++uses[static_cast<std::size_t>(node.symbol)];
+  for (int child : node.children) count_uses(nodes, child, uses);
+}
+
+void apply_aliases(Parser& parser, int index, int root, const ExpressionScope& scope) {
+  const Node node = parser.nodes()[static_cast<std::size_t>(index)];
+  if (node.op != Op::kAdd && node.op != Op::kSub) {
+    for (int child : node.children) apply_aliases(parser, child, root, scope);
+    return;
+  }
+  std::vector<std::pair<int, int>> terms;
+  flatten(parser.nodes(), index, 1, terms);
+  for (const SumAlias& alias : scope.sum_aliases) {
+    std::vector<int> uses(parser.symbols().size(), 0);
+    count_uses(parser.nodes(), root, uses);
+    replace_alias(parser, terms, alias, uses);
+  }
+  for (const auto& [term, sign] : terms) apply_aliases(parser, term, root, scope);
+}
+
 // Emits the tree below `node` onto the tape, folding constant subtrees; returns the register
 // holding its value.
 class Compiler {
@@ -264,6 +349,11 @@ class Compiler {
       if (exponent == std::round(exponent) && std::abs(exponent) <= 64)
         return fold_or_push({Op::kPowInt, a, -1, static_cast<int>(exponent), 0});
       return fold_or_push({Op::kPowConst, a, -1, 0, exponent});
+    }
+    if ((node.op == Op::kAdd || node.op == Op::kSub) && tape_.back().op == Op::kConst && tape_.back().value == 0 &&
+        tape_[static_cast<std::size_t>(a)].op != Op::kConst) {
+      tape_.pop_back();  // x ± 0, what an alias leaves
+      return a;
     }
     return fold_or_push({node.op, a, b, 0, 0});
   }
@@ -298,11 +388,25 @@ CompiledExpression::CompiledExpression(std::string text, const ExpressionScope& 
     : text_(std::move(text)) {
   Parser parser(text_, scope);
   const int root = parser.parse();
+  if (!scope.sum_aliases.empty()) apply_aliases(parser, root, root, scope);
   Compiler compiler(parser.nodes());
   compiler.emit(root);
   tape_ = compiler.take();
-  symbols_ = parser.symbols();
+  // The symbols the tape still reads, in order of first appearance.
+  for (const Instruction& in : tape_)
+    if (in.op == Op::kSlot)
+      for (const SymbolUse& s : parser.symbols())
+        if (s.slot == in.slot && std::none_of(symbols_.begin(), symbols_.end(), [&](const SymbolUse& u) { return u.name == s.name; }))
+          symbols_.push_back(s);
+  std::stable_sort(symbols_.begin(), symbols_.end(),
+                   [](const SymbolUse& a, const SymbolUse& b) { return a.position < b.position; });
   constants_read_ = parser.constants_read();
+}
+
+void CompiledExpression::remap_slots(const std::vector<int>& new_slot) {
+  for (Instruction& in : tape_)
+    if (in.op == Op::kSlot) in.slot = new_slot.at(static_cast<std::size_t>(in.slot));
+  for (SymbolUse& s : symbols_) s.slot = new_slot.at(static_cast<std::size_t>(s.slot));
 }
 
 std::vector<int> CompiledExpression::reads() const {

@@ -52,6 +52,12 @@
 
 namespace nfield::io {
 
+// A sum the caller reads as one name: u_xx + u_yy as lap(u), one stream instead of two.
+struct SumAlias {
+  std::vector<std::string> terms;
+  std::string name;
+};
+
 // What the names of an expression mean. Names are matched in this order: the slots, the
 // constants, then `resolve` (for names too many to list, such as derivative symbols). A
 // name none of them knows is an error listing `valid_names`.
@@ -60,10 +66,17 @@ struct ExpressionScope {
   std::vector<std::pair<std::string, double>> constants;  // folded into the tape
   // A slot for a name not listed above, or nullopt when the name is unknown. It may throw
   // std::invalid_argument saying why a name that looks valid is not (`u_z`: no variable z);
-  // the message is reported at the name's position.
+  // the message is reported at the name's position. It may be called more than once per
+  // name, and for names the expression ends up not reading (a `name(arg)` probe, a term an
+  // alias replaced): give the same slot each time, and take the slots read from symbols().
   std::function<std::optional<int>(std::string_view name)> resolve;
   // What an unknown-name error lists; empty: the slot and constant names.
   std::string valid_names;
+  // Where a chain of + and − (through unary −) has every term of an alias as a bare name,
+  // all with one sign, and those names are read nowhere else in the expression, they become
+  // the alias's name (resolved as any name) with that sign: `2 - (u_xx + u_yy)` reads
+  // lap(u), `u_xx + u_yy + u_xx*u` or `u_xx - u_yy` stays as written.
+  std::vector<SumAlias> sum_aliases;
 };
 
 // One name an expression reads through a slot, in order of first appearance.
@@ -104,7 +117,11 @@ class CompiledExpression {
   }
 
   const std::string& text() const { return text_; }
+  // The names read through slots (after aliases), in order of first appearance; a name the
+  // scope resolved that an alias replaced is not among them.
   const std::vector<SymbolUse>& symbols() const { return symbols_; }
+  // Moves every slot s the tape reads to new_slot[s] (a caller compacting its slots).
+  void remap_slots(const std::vector<int>& new_slot);
   // The scope's constants it reads (folded into the tape), in order of first appearance.
   const std::vector<std::string>& constants_read() const { return constants_read_; }
   // Sorted distinct slots the expression reads (after folding: x − x still reads x).

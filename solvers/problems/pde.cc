@@ -228,22 +228,36 @@ class Pde final : public Problem {
       r.name = "pde" + suffix;
       r.batch_key = "interior";
     }
-    std::vector<DerivativeSymbol> symbols;
+    // Candidate symbols get slots d, d + 1, … as they are resolved; those the compiled
+    // expression reads (an alias may have replaced some) are then renumbered from d.
+    std::vector<DerivativeSymbol> candidates;
     io::ExpressionScope s = scope(true);
     const int d = domain_.input_dim();
     s.resolve = [&](std::string_view name) -> std::optional<int> {
       const auto symbol = parse_derivative_symbol(name, outputs_, domain_.input_names(), domain_.space_dim());
       if (!symbol) return std::nullopt;
-      auto at = std::find(symbols.begin(), symbols.end(), *symbol);
-      if (at == symbols.end()) at = symbols.insert(symbols.end(), *symbol);
-      return d + static_cast<int>(at - symbols.begin());
+      auto at = std::find(candidates.begin(), candidates.end(), *symbol);
+      if (at == candidates.end()) at = candidates.insert(candidates.end(), *symbol);
+      return d + static_cast<int>(at - candidates.begin());
     };
+    s.sum_aliases = laplacian_aliases();
+    io::CompiledExpression expression;
     try {
-      r.expression = std::make_shared<const io::CompiledExpression>(text, s);
-      note_constants(*r.expression);
+      expression = io::CompiledExpression(text, s);
+      note_constants(expression);
     } catch (const io::ExpressionError& e) {
       throw item.is_map() ? item.expression_error("expr", e) : item.expression_error(e);
     }
+    std::vector<DerivativeSymbol> symbols;
+    std::vector<int> slot(static_cast<std::size_t>(d) + candidates.size());
+    for (int a = 0; a < d; ++a) slot[static_cast<std::size_t>(a)] = a;
+    for (const io::SymbolUse& use : expression.symbols())
+      if (use.slot >= d) {
+        slot[static_cast<std::size_t>(use.slot)] = d + static_cast<int>(symbols.size());
+        symbols.push_back(candidates[static_cast<std::size_t>(use.slot - d)]);
+      }
+    expression.remap_slots(slot);
+    r.expression = std::make_shared<const io::CompiledExpression>(std::move(expression));
     const auto error = [&](const std::string& message) {
       return item.is_map() ? item.error("expr", message) : item.error(message);
     };
@@ -258,6 +272,21 @@ class Pde final : public Problem {
     r.symbols = std::make_shared<const std::vector<std::vector<SymbolTerm>>>(std::move(plan.symbols));
     if (item.is_map()) item.reject_unknown_keys();
     return r;
+  }
+
+  // u_xx + u_yy (+ u_zz) read as lap(u): one operator stream instead of two or three.
+  std::vector<io::SumAlias> laplacian_aliases() const {
+    std::vector<io::SumAlias> aliases;
+    if (domain_.space_dim() < 2) return aliases;
+    for (const std::string& u : outputs_) {
+      io::SumAlias alias{{}, "lap(" + u + ")"};
+      for (int a = 0; a < domain_.space_dim(); ++a) {
+        const std::string axis = domain_.input_names()[static_cast<std::size_t>(a)];
+        alias.terms.push_back(u + "_" + axis + axis);
+      }
+      aliases.push_back(std::move(alias));
+    }
+    return aliases;
   }
 
   // `on`: faces, boundary or initial; absent: the interior.

@@ -261,5 +261,48 @@ TEST(CompiledExpression, ResolvedNamesAndAppliedNames) {
   expect_error("grad(u)", 0, "unknown function 'grad'", scope);
 }
 
+// u_xx + u_yy read as lap(u) where the sum is whole, of one sign, and its terms read nowhere
+// else; slots: x 0, u_xx 3, u_yy 4, lap(u) 5.
+TEST(CompiledExpression, SumAliases) {
+  ExpressionScope scope;
+  scope.slots = {{"x", 0}, {"u_xx", 3}, {"u_yy", 4}};
+  scope.resolve = [](std::string_view name) -> std::optional<int> {
+    if (name == "lap(u)") return 5;
+    return std::nullopt;
+  };
+  scope.sum_aliases = {{{"u_xx", "u_yy"}, "lap(u)"}};
+  const double row[6] = {0.5, 0, 0, 2, 3, 7};  // lap(u) = 7 ≠ 2 + 3: tells which was read
+  std::vector<double> scratch;
+  struct Aliased {
+    const char* text;
+    double value;
+    std::vector<int> reads;
+  };
+  const Aliased cases[] = {
+      {"u_xx + u_yy", 7, {5}},
+      {"2 - (u_xx + u_yy)", -5, {5}},
+      {"-u_xx - u_yy + x", -6.5, {0, 5}},
+      {"u_yy + x + u_xx", 7.5, {0, 5}},
+      {"sin(u_xx + u_yy)", std::sin(7.0), {5}},
+      {"u_xx + u_yy + u_xx*x", 6, {0, 3, 4}},  // u_xx read twice
+      {"u_xx - u_yy", -1, {3, 4}},          // two signs
+      {"u_xx*2 + u_yy", 7, {3, 4}},         // not a bare term
+      {"u_xx", 2, {3}},
+  };
+  for (const Aliased& c : cases) {
+    SCOPED_TRACE(c.text);
+    const CompiledExpression e(c.text, scope);
+    EXPECT_DOUBLE_EQ(e.evaluate<double>(row, scratch), c.value);
+    EXPECT_EQ(e.reads(), c.reads);
+  }
+  CompiledExpression moved("x + u_xx + u_yy", scope);
+  EXPECT_EQ(moved.symbols()[1].name, "lap(u)");
+  EXPECT_EQ(moved.symbols()[1].position, 4u);
+  moved.remap_slots({1, -1, -1, -1, -1, 0});
+  const double swapped[2] = {7, 0.5};
+  EXPECT_DOUBLE_EQ(moved.evaluate<double>(swapped, scratch), 7.5);
+  EXPECT_EQ(moved.reads(), (std::vector<int>{0, 1}));
+}
+
 }  // namespace
 }  // namespace nfield::io

@@ -320,6 +320,37 @@ TEST(Pde, ShortPoissonRunLowersTheError) {
   EXPECT_LT(after, before / 10);  // measured: 2.1 -> 0.11 (seed 0, one thread)
 }
 
+// u_xx + u_yy costs one Laplacian stream (as lap(u)); u_xx - u_yy two operator streams.
+TEST(Pde, SumOfSecondDerivativesIsOneLaplacianStream) {
+  const char* text = R"yaml(problem: pde
+domain: {lower: [0, 0], upper: [1, 1]}
+equation:
+  residuals: ["u_xx + u_yy - x", "u_xx - u_yy"]
+)yaml";
+  const RunSetup setup = load_run(write_config("sum", text), {});
+  const std::vector<LossTerm> terms = setup.problem->loss_terms();
+  ASSERT_EQ(terms.size(), 2u);
+  EXPECT_EQ(terms[0].spec.operators.size(), 1u);
+  EXPECT_EQ(terms[1].spec.operators.size(), 2u);
+  std::mt19937 rng(2);
+  const Exponentials f = random_exponentials(2, 1, rng);
+  Random points(3);
+  const Eigen::MatrixXd x = terms[0].sample(points, 9);
+  for (const LossTerm& term : terms) {
+    const autodiff::StreamLayout layout(term.spec);
+    const autodiff::Streams<double> s = exponential_streams(layout, f, x, 1);
+    Eigen::MatrixXd r;
+    term.residual(x)->evaluate(0, layout, s, r);
+    for (Eigen::Index n = 0; n < x.rows(); ++n) {
+      const Eigen::VectorXd p = x.row(n).transpose();
+      const double want = &term == &terms[0]
+          ? f.sum(0, p, [](const Eigen::VectorXd& c) { return c.squaredNorm(); }) - p(0)
+          : f.sum(0, p, [](const Eigen::VectorXd& c) { return c(0) * c(0) - c(1) * c(1); });
+      EXPECT_NEAR(r(n, 0), want, 1e-12) << term.name;
+    }
+  }
+}
+
 const char* kTwoOutputs = R"yaml(problem: pde
 domain: {lower: [0], upper: [1], time: [0, 1]}
 outputs: [u, v]
