@@ -85,6 +85,31 @@ std::map<std::vector<int>, double> bilaplacian(int space_dim, int input_dim) {
   return out;
 }
 
+// Symbol s as stream entries: its tangent (`tangent`, first order), its operator stream
+// (`op`), or its Taylor coefficients (`taylor` over `directions`; the 2D bilaplacian's three
+// directions follow the integer ones).
+std::vector<SymbolTerm> symbol_terms(const autodiff::StreamLayout& layout, const DerivativeSymbol& s, int space_dim,
+                                     int tangent, int op, const std::map<std::vector<int>, double>& taylor,
+                                     const std::vector<std::vector<int>>& directions) {
+  std::vector<SymbolTerm> terms;
+  if (s.order() == 0) {
+    terms.push_back({autodiff::StreamLayout::value(), s.output, 1.0});
+  } else if (s.kind == DerivativeSymbol::Kind::kPartial && s.order() == 1) {
+    terms.push_back({layout.tangent(tangent), s.output, 1.0});
+  } else if (op >= 0) {
+    terms.push_back({layout.op(op), s.output, 1.0});
+  } else if (s.kind == DerivativeSymbol::Kind::kBilaplacian && space_dim == 2) {
+    for (int p = 0; p < 3; ++p)
+      terms.push_back({layout.taylor(static_cast<int>(directions.size()) + p, 4), s.output, autodiff::kBiharmonic2dWeight});
+  } else {
+    for (const auto& [w, c] : taylor) {
+      const auto p = static_cast<int>(std::find(directions.begin(), directions.end(), w) - directions.begin());
+      terms.push_back({layout.taylor(p, s.order()), s.output, c});
+    }
+  }
+  return terms;
+}
+
 }  // namespace
 
 int DerivativeSymbol::order() const {
@@ -198,26 +223,10 @@ StreamPlan plan_streams(const std::vector<DerivativeSymbol>& symbols, int input_
   }
 
   const autodiff::StreamLayout layout(plan.spec);
-  for (std::size_t k = 0; k < symbols.size(); ++k) {
-    const DerivativeSymbol& s = symbols[k];
-    std::vector<SymbolTerm> terms;
-    if (s.order() == 0) {
-      terms.push_back({autodiff::StreamLayout::value(), s.output, 1.0});
-    } else if (s.kind == Kind::kPartial && s.order() == 1) {
-      terms.push_back({layout.tangent(tangent_of(s.axes[0])), s.output, 1.0});
-    } else if (operator_of[k] >= 0) {
-      terms.push_back({layout.op(operator_of[k]), s.output, 1.0});
-    } else if (s.kind == Kind::kBilaplacian && space_dim == 2) {
-      for (int p = 0; p < 3; ++p)
-        terms.push_back({layout.taylor(integer_dirs + p, 4), s.output, autodiff::kBiharmonic2dWeight});
-    } else {
-      for (const auto& [w, c] : taylor_of[k]) {
-        const int p = static_cast<int>(std::find(directions.begin(), directions.end(), w) - directions.begin());
-        terms.push_back({layout.taylor(p, s.order()), s.output, c});
-      }
-    }
-    plan.symbols.push_back(std::move(terms));
-  }
+  for (std::size_t k = 0; k < symbols.size(); ++k)
+    plan.symbols.push_back(symbol_terms(layout, symbols[k], space_dim,
+                                        symbols[k].axes.empty() ? -1 : tangent_of(symbols[k].axes[0]), operator_of[k],
+                                        taylor_of[k], directions));
   return plan;
 }
 
