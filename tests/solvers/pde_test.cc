@@ -351,6 +351,70 @@ equation:
   }
 }
 
+// A fourth- and mixed third-order residual from a config vanishes on its exact solution
+// u = exp(ax + by): bilap(u) = (a² + b²)² u, u_xxy = a²b u.
+TEST(Pde, HigherOrderResidualVanishesOnItsSolution) {
+  const char* text = R"yaml(problem: pde
+domain: {lower: [0, 0], upper: [1, 1]}
+constants: {a: 0.5, b: -0.3, c: "(a^2 + b^2)^2 + a^2*b"}
+equation:
+  residuals: ["bilap(u) + u_xxy - c*exp(a*x + b*y)"]
+)yaml";
+  const RunSetup setup = load_run(write_config("fourth", text), {});
+  const LossTerm term = setup.problem->loss_terms()[0];
+  EXPECT_EQ(term.spec.taylor_order, 4);
+  Exponentials f;
+  f.rates = {Eigen::Vector2d(0.5, -0.3)};
+  f.weights = Eigen::MatrixXd::Ones(1, 1);
+  Random points(4);
+  const Eigen::MatrixXd x = term.sample(points, 17);
+  const autodiff::StreamLayout layout(term.spec);
+  Eigen::MatrixXd r;
+  term.residual(x)->evaluate(0, layout, exponential_streams(layout, f, x, 1), r);
+  EXPECT_LT(r.cwiseAbs().maxCoeff(), 1e-13);
+  f.rates[0](1) = -0.31;  // another solution's streams: the residual sees it
+  term.residual(x)->evaluate(0, layout, exponential_streams(layout, f, x, 1), r);
+  EXPECT_GT(r.cwiseAbs().maxCoeff(), 1e-3);
+}
+
+// A simply supported beam, u_xxxx = π⁴ sin(πx), u = u_xx = 0 at both ends (boundary
+// residuals): Taylor streams of order 4 in training, and residuals on faces.
+TEST(Pde, BeamWithBoundaryResidualsTrains) {
+  const char* text = R"yaml(problem: pde
+domain: {lower: [0], upper: [1]}
+equation:
+  residuals:
+    - "u_xxxx - pi^4*sin(pi*x)"
+    - {expr: "u", on: boundary, weight: 100}
+    - {expr: "u_xx", on: boundary, name: moment}
+reference:
+  exact: "sin(pi*x)"
+field: {type: siren, hidden: [32, 32], first_omega: 2, hidden_omega: 1}
+training:
+  seed: 0
+  threads: 1
+  precision: double
+  batch: {interior: 256, boundary: 32}
+  stages:
+    - {optimizer: adam, steps: 500, lr: 2.0e-3, schedule: cosine, lr_final: 1.0e-4}
+    - {optimizer: lbfgs, steps: 100}
+)yaml";
+  RunSetup setup = load_run(write_config("beam", text), {});
+  const std::vector<LossTerm> terms = setup.problem->loss_terms();
+  ASSERT_EQ(terms.size(), 3u);
+  EXPECT_EQ(terms[1].name, "residual_1");
+  EXPECT_EQ(terms[1].batch_key, "boundary");
+  EXPECT_EQ(terms[2].name, "moment");
+  fields::Field<double> field(setup.field);
+  Trainer<double> trainer(*setup.problem, field, setup.training);
+  ASSERT_TRUE(trainer.run({}));
+  const Eigen::MatrixXd x = Eigen::VectorXd::LinSpaced(101, 0, 1);
+  const Eigen::MatrixXd exact = setup.problem->exact(x);
+  const double rel_l2 = (field.values(x) - exact).norm() / exact.norm();
+  std::printf("beam, 500 Adam + 100 L-BFGS steps: rel_l2 %.3e\n", rel_l2);
+  EXPECT_LT(rel_l2, 2e-3);  // measured 2.8e-4 (nfield run, the same config)
+}
+
 const char* kTwoOutputs = R"yaml(problem: pde
 domain: {lower: [0], upper: [1], time: [0, 1]}
 outputs: [u, v]
