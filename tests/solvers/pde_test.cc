@@ -415,6 +415,30 @@ training:
   EXPECT_LT(rel_l2, 2e-3);  // measured 2.8e-4 (nfield run, the same config)
 }
 
+// A residual `on: initial` draws its points at t0 from the `initial` batch; without a time
+// interval it is a located error.
+TEST(Pde, InitialResidual) {
+  const char* text = R"yaml(problem: pde
+domain: {lower: [0], upper: [1], time: [0.5, 1]}
+equation:
+  residuals:
+    - "u_t - u_xx"
+    - {expr: "u_t", on: initial}
+)yaml";
+  const RunSetup setup = load_run(write_config("initial", text), {});
+  const LossTerm term = setup.problem->loss_terms()[1];
+  EXPECT_EQ(term.name, "residual_1");
+  EXPECT_EQ(term.batch_key, "initial");
+  Random rng(1);
+  const Eigen::MatrixXd x = term.sample(rng, 8);
+  EXPECT_TRUE((x.col(1).array() == 0.5).all());
+  std::string no_time = text;
+  no_time.replace(no_time.find(", time: [0.5, 1]"), 16, "");
+  no_time.replace(no_time.find("u_t - u_xx"), 10, "u_xx");
+  testutil::expect_located_error(write_config("initial_no_time", no_time),
+                                 {6, 25, "equation.residuals[1].on", "'initial' needs a domain with a time interval"});
+}
+
 const char* kTwoOutputs = R"yaml(problem: pde
 domain: {lower: [0], upper: [1], time: [0, 1]}
 outputs: [u, v]
