@@ -245,7 +245,6 @@ class Parser {
   std::vector<SymbolUse>& symbols() { return symbols_; }
 
  private:
-
   std::string valid_names() const {
     if (!scope_.valid_names.empty()) return scope_.valid_names;
     std::string out;
@@ -306,14 +305,15 @@ void replace_alias(Parser& parser, const std::vector<std::pair<int, int>>& terms
   for (std::size_t k = 1; k < found.size(); ++k) nodes[static_cast<std::size_t>(found[k])] = Node{Op::kConst, {}, 0.0};
 }
 
-// Counts the reads of each symbol below `index` (uses) and applies the aliases to every
-// chain of + and −.
+// Counts the reads of each symbol below `index` into `uses`.
 void count_uses(const std::vector<Node>& nodes, int index, std::vector<int>& uses) {
   const Node& node = nodes[static_cast<std::size_t>(index)];
   if (node.op == Op::kSlot && node.symbol >= 0) ++uses[static_cast<std::size_t>(node.symbol)];
   for (int child : node.children) count_uses(nodes, child, uses);
 }
 
+// Applies the scope's sum aliases to every chain of + and − below `index` (`root`: the whole
+// expression, where a term must be read only once).
 void apply_aliases(Parser& parser, int index, int root, const ExpressionScope& scope) {
   const Node node = parser.nodes()[static_cast<std::size_t>(index)];
   if (node.op != Op::kAdd && node.op != Op::kSub) {
@@ -401,6 +401,17 @@ CompiledExpression::CompiledExpression(std::string text, const ExpressionScope& 
   std::stable_sort(symbols_.begin(), symbols_.end(),
                    [](const SymbolUse& a, const SymbolUse& b) { return a.position < b.position; });
   constants_read_ = parser.constants_read();
+}
+
+std::vector<char> CompiledExpression::varying_from(int first_slot) const {
+  std::vector<char> varying(tape_.size(), 0);
+  for (std::size_t k = 0; k < tape_.size(); ++k) {
+    const Instruction& in = tape_[k];
+    if (in.op == Op::kSlot) varying[k] = in.slot >= first_slot;
+    else if (in.op != Op::kConst)
+      varying[k] = varying[static_cast<std::size_t>(in.a)] || (in.b >= 0 && varying[static_cast<std::size_t>(in.b)]);
+  }
+  return varying;
 }
 
 void CompiledExpression::remap_slots(const std::vector<int>& new_slot) {

@@ -116,6 +116,17 @@ class CompiledExpression {
     return value;
   }
 
+  // Per instruction, whether it depends on a slot ≥ first_slot. The others are fixed while
+  // only those slots vary: a pass in Jet over the symbols of a residual can take them from a
+  // pass in double (evaluate_varying) instead of recomputing a source term's sines in Jet.
+  std::vector<char> varying_from(int first_slot) const;
+  // One point in T, with the instructions that are not `varying` read as T(fixed[k · stride])
+  // for instruction k (the registers of an evaluate<double> over a block: its scratch, offset
+  // to the point, stride the block's size).
+  template <typename T>
+  T evaluate_varying(const T* row, const std::vector<char>& varying, const double* fixed, Eigen::Index stride,
+                     std::vector<T>& scratch) const;
+
   const std::string& text() const { return text_; }
   // The names read through slots (after aliases), in order of first appearance; a name the
   // scope resolved that an alias replaced is not among them.
@@ -220,6 +231,20 @@ void CompiledExpression::evaluate(Eigen::Index n, const T* inputs, Eigen::Index 
   }
   const T* last = r + (registers - 1) * n;
   for (Eigen::Index p = 0; p < n; ++p) out[p] = last[p];
+}
+
+template <typename T>
+T CompiledExpression::evaluate_varying(const T* row, const std::vector<char>& varying, const double* fixed,
+                                       Eigen::Index stride, std::vector<T>& scratch) const {
+  const std::size_t registers = tape_.size();
+  if (scratch.size() < registers) scratch.resize(registers);
+  for (std::size_t k = 0; k < registers; ++k) {
+    const Instruction& in = tape_[k];
+    if (!varying[k]) scratch[k] = T(fixed[static_cast<Eigen::Index>(k) * stride]);
+    else if (in.op == Op::kSlot) scratch[k] = row[in.slot];
+    else scratch[k] = apply<T>(in, scratch[static_cast<std::size_t>(in.a)], scratch[static_cast<std::size_t>(in.b < 0 ? in.a : in.b)]);
+  }
+  return scratch[registers - 1];
 }
 
 }  // namespace nfield::io

@@ -11,7 +11,10 @@ namespace nfield::solvers {
 ExpressionResidual::ExpressionResidual(std::shared_ptr<const io::CompiledExpression> expression,
                                        std::shared_ptr<const std::vector<std::vector<SymbolTerm>>> symbols,
                                        Eigen::MatrixXd points)
-    : expression_(std::move(expression)), symbols_(std::move(symbols)), points_(std::move(points)) {
+    : expression_(std::move(expression)),
+      symbols_(std::move(symbols)),
+      points_(std::move(points)),
+      varying_(expression_->varying_from(static_cast<int>(points_.cols()))) {
   const auto n = static_cast<int>(symbols_->size());
   if (n < 1 || n > kMaxExpressionReads)
     throw std::invalid_argument("a residual expression reads 1 to " + std::to_string(kMaxExpressionReads) +
@@ -31,6 +34,12 @@ double ExpressionResidual::symbol(int k, Eigen::Index point, const Streams<doubl
 void ExpressionResidual::evaluate(Eigen::Index first, const StreamLayout& layout, const Streams<double>& out,
                                   Eigen::MatrixXd& r) const {
   (void)layout;
+  std::vector<double> scratch;
+  evaluate_into(first, out, r, scratch);
+}
+
+void ExpressionResidual::evaluate_into(Eigen::Index first, const Streams<double>& out, Eigen::MatrixXd& r,
+                                       std::vector<double>& scratch) const {
   const Eigen::Index n = out.points, d = points_.cols();
   const auto count = static_cast<int>(symbols_->size());
   Eigen::MatrixXd inputs(n, d + count);
@@ -42,7 +51,6 @@ void ExpressionResidual::evaluate(Eigen::Index first, const StreamLayout& layout
       column += t.coefficient * out.data.block(t.stream * n, t.channel, n, 1);
   }
   r.resize(n, 1);
-  std::vector<double> scratch;
   expression_->evaluate<double>(n, inputs.data(), n, r.data(), scratch);
 }
 
@@ -52,11 +60,15 @@ void ExpressionResidual::backward_jet(Eigen::Index first, const Streams<double>&
   using Jet = ceres::Jet<double, M>;
   const Eigen::Index n = out.points, d = points_.cols();
   const auto count = static_cast<int>(symbols_->size());
+  // The instructions that read no symbol (a source term) once in double over the block.
+  Eigen::MatrixXd r;
+  std::vector<double> fixed;
+  evaluate_into(first, out, r, fixed);
   std::vector<Jet> row(static_cast<std::size_t>(d + count)), scratch;
   for (Eigen::Index p = 0; p < n; ++p) {
-    for (Eigen::Index a = 0; a < d; ++a) row[static_cast<std::size_t>(a)] = Jet(points_(first + p, a));
+    // (The coordinates, slots 0 … d − 1, are read from the double pass.)
     for (int k = 0; k < count; ++k) row[static_cast<std::size_t>(d + k)] = Jet(symbol(k, p, out), k);
-    const Jet y = expression_->evaluate<Jet>(row.data(), scratch);
+    const Jet y = expression_->evaluate_varying<Jet>(row.data(), varying_, fixed.data() + p, n, scratch);
     for (int k = 0; k < count; ++k) {
       const double g = r_bar(p, 0) * y.v[k];
       for (const SymbolTerm& t : (*symbols_)[static_cast<std::size_t>(k)])

@@ -11,7 +11,8 @@
 //   evaluate   e in double over the block: the coordinates and symbols as the columns of one
 //              n × (d + N) matrix, the tape run once per instruction over the block;
 //   backward   e per point in ceres::Jet<double, M>, the symbols seeded as unit duals and the
-//              coordinates as constants, so y.v[k] = ∂r/∂s_k, and
+//              coordinates as constants, so y.v[k] = ∂r/∂s_k (the instructions that read no
+//              symbol, a source term, are taken from a pass in double over the block), and
 //              adjoint[stream_kj][channel_kj] += c_kj · r̄ₙ · ∂r/∂s_k:
 //              the contract of Residual::backward, with no adjoint written by hand.
 //
@@ -48,6 +49,9 @@ class ExpressionResidual final : public Residual {
 
  private:
   double symbol(int k, Eigen::Index point, const Streams<double>& out) const;
+  // r over the block, keeping the registers of the tape (n per instruction) in `scratch`.
+  void evaluate_into(Eigen::Index first, const Streams<double>& out, Eigen::MatrixXd& r,
+                     std::vector<double>& scratch) const;
   template <int M>
   void backward_jet(Eigen::Index first, const Streams<double>& out, const Eigen::MatrixXd& r_bar,
                     Streams<double>& adjoint) const;
@@ -55,6 +59,7 @@ class ExpressionResidual final : public Residual {
   std::shared_ptr<const io::CompiledExpression> expression_;
   std::shared_ptr<const std::vector<std::vector<SymbolTerm>>> symbols_;
   Eigen::MatrixXd points_;
+  std::vector<char> varying_;  // the instructions that read a symbol (the rest: from a double pass)
 };
 
 }  // namespace nfield::solvers
