@@ -462,13 +462,13 @@ std::string ConfigNode::get_choice(std::string_view key, const std::vector<std::
   return get_choice(key, choices);
 }
 
-Expression ConfigNode::get_expression(std::string_view key,
-                                      std::vector<std::string> variables) const {
+Expression ConfigNode::get_expression(std::string_view key, std::vector<std::string> variables,
+                                      ExpressionConstants constants) const {
   const YAML::Node value = require_value(key);
   const std::string text =
       convert_scalar<std::string>(value, Where{file_, own_mark(value), child_path(key)});
   try {
-    return Expression(text, std::move(variables));
+    return Expression(text, std::move(variables), std::move(constants));
   } catch (const ExpressionError& e) {
     throw expression_error(key, e);
   }
@@ -501,10 +501,10 @@ ConfigError ConfigNode::expression_error(const ExpressionError& e) const {
 }
 
 Expression ConfigNode::get_expression_or(std::string_view key, std::string_view fallback,
-                                         std::vector<std::string> variables) const {
+                                         std::vector<std::string> variables, ExpressionConstants constants) const {
   std::optional<Entry> entry = find(key);
-  if (!entry || is_empty(entry->value)) return Expression(std::string(fallback), variables);
-  return get_expression(key, std::move(variables));
+  if (!entry || is_empty(entry->value)) return Expression(std::string(fallback), variables, constants);
+  return get_expression(key, std::move(variables), std::move(constants));
 }
 
 ConfigNode ConfigNode::child(std::string_view key) const {

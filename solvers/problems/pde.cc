@@ -25,10 +25,11 @@
 // lap(u), bilap(u)); each residual asks the field for exactly the streams of the symbols it
 // reads, and its adjoint comes from ceres::Jet (solvers/problems/pde_residual.h).
 //
-// A constant no expression reads is an error (a typo, as an unknown key is).
+// The constants are numbers in every expression of the config: residuals, reference.exact,
+// later constants and the conditions' values. One no expression reads is an error (a typo,
+// as an unknown key is).
 // Limits: a residual reads at most 32 symbols; hard conditions (enforce: hard) take no
-// residual of order above 2; the condition values and `domain` do not see `constants`
-// (they are muparser expressions over the variables, io/expression.h).
+// residual of order above 2.
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -92,13 +93,14 @@ class Pde final : public Problem {
     for (std::size_t i = 0; i < list.size(); ++i) residuals_.push_back(read_residual(list.at(i), i));
     equation.reject_unknown_keys();
     if (root.has("conditions"))
-      conditions_ = condition_terms(root.child("conditions"), domain_, output_dim(), &ansatz_);
+      conditions_ = condition_terms(root.child("conditions"), domain_, output_dim(), &ansatz_, constants_);
+    if (root.has("conditions")) note_condition_constants(root.child("conditions"));
     check_terms();
     if (root.has("reference")) read_reference(root.child("reference"));
     for (const auto& [name, value] : constants_)
       if (!contains(constants_used_, name))
         throw root.child("constants").error(name, "constant '" + name + "' is never used (by a residual, "
-                                                  "reference.exact or another constant)");
+                                                  "a condition, reference.exact or another constant)");
   }
 
   const Domain& domain() const override { return domain_; }
@@ -189,6 +191,22 @@ class Pde final : public Problem {
   void note_constants(const io::CompiledExpression& e) {
     for (const std::string& name : e.constants_read())
       if (!contains(constants_used_, name)) constants_used_.push_back(name);
+  }
+
+  // The constants the conditions' values read (muparser expressions, read by condition_terms).
+  void note_condition_constants(const io::ConfigNode& conditions) {
+    for (std::size_t i = 0; i < conditions.size(); ++i) {
+      const io::ConfigNode item = conditions.at(i);
+      std::vector<std::string> texts;
+      if (item.has_list("value"))
+        for (std::size_t c = 0; c < item.child("value").size(); ++c) texts.push_back(item.child("value").at(c).as<std::string>());
+      else if (item.has("value"))
+        texts.push_back(item.get<std::string>("value"));
+      for (const std::string& text : texts)
+        for (const std::string& name :
+             io::Expression(text.empty() ? "0" : text, domain_.expression_variables(), constants_).constants_used())
+          if (!contains(constants_used_, name)) constants_used_.push_back(name);
+    }
   }
 
   std::string constant_names() const {

@@ -439,6 +439,33 @@ equation:
                                  {6, 25, "equation.residuals[1].on", "'initial' needs a domain with a time interval"});
 }
 
+// The constants reach the conditions' values, soft and hard; one read only there is used.
+TEST(Pde, ConstantsInConditions) {
+  const char* text = R"yaml(problem: pde
+domain: {lower: [0], upper: [1], time: [0, 1]}
+constants: {a: 3, amplitude: "2*a"}
+equation:
+  residuals: ["u_t - u_xx"]
+conditions:
+  - {on: [x_max], type: dirichlet, value: "a*t"}
+  - {on: initial, type: value, value: "amplitude*sin(pi*x)", enforce: hard}
+)yaml";
+  const RunSetup setup = load_run(write_config("constants_in_conditions", text), {});
+  const std::vector<LossTerm> terms = setup.problem->loss_terms();
+  ASSERT_EQ(terms.size(), 2u);
+  ASSERT_EQ(terms[1].name, "dirichlet");
+  Random rng(5);
+  const Eigen::MatrixXd x = terms[1].sample(rng, 6);
+  const autodiff::StreamLayout layout(terms[1].spec);
+  autodiff::Streams<double> zero;
+  zero.resize(x.rows(), layout.count(), 1);
+  zero.data.setZero();
+  Eigen::MatrixXd r;
+  terms[1].residual(x)->evaluate(0, layout, zero, r);
+  EXPECT_TRUE(r.col(0).isApprox(-3 * x.col(1), 1e-14));  // u − g with u = 0, g = a t
+  ASSERT_NE(setup.problem->ansatz(), nullptr);
+}
+
 const char* kTwoOutputs = R"yaml(problem: pde
 domain: {lower: [0], upper: [1], time: [0, 1]}
 outputs: [u, v]
