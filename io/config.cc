@@ -462,30 +462,49 @@ std::string ConfigNode::get_choice(std::string_view key, const std::vector<std::
   return get_choice(key, choices);
 }
 
-Expression ConfigNode::get_expression(std::string_view key,
-                                      std::vector<std::string> variables) const {
+Expression ConfigNode::get_expression(std::string_view key, std::vector<std::string> variables,
+                                      ExpressionConstants constants) const {
   const YAML::Node value = require_value(key);
   const std::string text =
       convert_scalar<std::string>(value, Where{file_, own_mark(value), child_path(key)});
   try {
-    return Expression(text, std::move(variables));
+    return Expression(text, std::move(variables), std::move(constants));
   } catch (const ExpressionError& e) {
-    YAML::Mark mark = own_mark(value);
-    // Point at the offending character when the text sits on one line of the file:
-    // plain scalars start at the mark, quoted ones (tag "!") one character later.
-    if (value.Mark().line >= 0 && e.position() != std::string::npos &&
-        e.position() <= text.size() && text.find('\n') == std::string::npos &&
-        (value.Tag() == "?" || value.Tag() == "!"))
-      mark.column += static_cast<int>(e.position()) + (value.Tag() == "!" ? 1 : 0);
-    throw ConfigError(file_, mark, child_path(key), e.what());
+    throw expression_error(key, e);
   }
 }
 
-Expression ConfigNode::get_expression_or(std::string_view key, std::string_view fallback,
-                                         std::vector<std::string> variables) const {
+namespace {
+
+// Where an expression error points: the offending character when the text sits on one line
+// of the file (plain scalars start at the mark, quoted ones, tag "!", one character later).
+YAML::Mark expression_mark(const YAML::Node& value, const ExpressionError& e) {
+  YAML::Mark mark = own_mark(value);
+  const std::string& text = e.expression();
+  if (value.IsScalar() && value.Mark().line >= 0 && e.position() != std::string::npos &&
+      e.position() <= text.size() && text.find('\n') == std::string::npos &&
+      value.Scalar() == text && (value.Tag() == "?" || value.Tag() == "!"))
+    mark.column += static_cast<int>(e.position()) + (value.Tag() == "!" ? 1 : 0);
+  return mark;
+}
+
+}  // namespace
+
+ConfigError ConfigNode::expression_error(std::string_view key, const ExpressionError& e) const {
   std::optional<Entry> entry = find(key);
-  if (!entry || is_empty(entry->value)) return Expression(std::string(fallback), variables);
-  return get_expression(key, std::move(variables));
+  if (!entry) return error(key, e.what());
+  return ConfigError(file_, expression_mark(entry->value, e), child_path(key), e.what());
+}
+
+ConfigError ConfigNode::expression_error(const ExpressionError& e) const {
+  return ConfigError(file_, expression_mark(node_, e), path_, e.what());
+}
+
+Expression ConfigNode::get_expression_or(std::string_view key, std::string_view fallback,
+                                         std::vector<std::string> variables, ExpressionConstants constants) const {
+  std::optional<Entry> entry = find(key);
+  if (!entry || is_empty(entry->value)) return Expression(std::string(fallback), variables, constants);
+  return get_expression(key, std::move(variables), std::move(constants));
 }
 
 ConfigNode ConfigNode::child(std::string_view key) const {

@@ -155,9 +155,16 @@ class ConfigNode {
   // A math expression over `variables` (see io/expression.h). A syntax error is
   // reported at the file position of the offending character where it can be found.
   Expression get_expression(std::string_view key,
-                            std::vector<std::string> variables = {"x", "y", "z", "t"}) const;
+                            std::vector<std::string> variables = {"x", "y", "z", "t"},
+                            ExpressionConstants constants = {}) const;
   Expression get_expression_or(std::string_view key, std::string_view fallback,
-                               std::vector<std::string> variables = {"x", "y", "z", "t"}) const;
+                               std::vector<std::string> variables = {"x", "y", "z", "t"},
+                               ExpressionConstants constants = {}) const;
+  // The ConfigError for an ExpressionError (io/expression.h, io/compiled_expression.h) in the
+  // text at `key`, or in this node's own text: at the file column of the offending character
+  // where the text sits on one line of the file, else at the text.
+  ConfigError expression_error(std::string_view key, const ExpressionError& e) const;
+  ConfigError expression_error(const ExpressionError& e) const;
   // A mapping or list under `key`; an error if absent or a scalar.
   ConfigNode child(std::string_view key) const;
   // Like child, but an absent (or empty) key gives an empty mapping, so that

@@ -32,6 +32,7 @@ std::size_t error_position(const mu::ParserError& e) {
 struct Evaluator {
   mu::Parser parser;
   std::vector<double> values;
+  std::vector<double> constants;  // bound as variables, so that muparser reports their use
 };
 
 }  // namespace
@@ -46,7 +47,9 @@ ExpressionError::ExpressionError(std::string expression, std::size_t position,
 struct Expression::Shared {
   std::string text;
   std::vector<std::string> variables;
+  ExpressionConstants constants;
   std::vector<bool> used;
+  std::vector<std::string> constants_used;
   std::mutex mutex;
   std::vector<std::unique_ptr<Evaluator>> idle;
 
@@ -62,6 +65,11 @@ struct Expression::Shared {
       parser.DefineFun("step", step);
       for (std::size_t i = 0; i < variables.size(); ++i)
         parser.DefineVar(variables[i], &evaluator->values[i]);
+      evaluator->constants.resize(constants.size());
+      for (std::size_t i = 0; i < constants.size(); ++i) {
+        evaluator->constants[i] = constants[i].second;
+        parser.DefineVar(constants[i].first, &evaluator->constants[i]);
+      }
       parser.SetExpr(text);
       parser.Eval();  // compiles to bytecode; reports syntax errors and unknown names
     } catch (const mu::ParserError& e) {
@@ -110,21 +118,26 @@ struct Expression::Shared {
   };
 };
 
-Expression::Expression(std::string text, std::vector<std::string> variables)
+Expression::Expression(std::string text, std::vector<std::string> variables, ExpressionConstants constants)
     : shared_(std::make_shared<Shared>()) {
   std::set<std::string_view> seen;
-  for (const std::string& name : variables) {
+  auto check = [&](const std::string& name) {
     if (!is_identifier(name))
       throw ExpressionError(text, std::string::npos, "invalid variable name '" + name + "'");
     if (!seen.insert(name).second)
       throw ExpressionError(text, std::string::npos, "variable '" + name + "' listed twice");
-  }
+  };
+  for (const std::string& name : variables) check(name);
+  for (const auto& constant : constants) check(constant.first);
   shared_->text = std::move(text);
   shared_->variables = std::move(variables);
+  shared_->constants = std::move(constants);
   auto evaluator = shared_->make_evaluator();
   const mu::varmap_type& used = evaluator->parser.GetUsedVar();
   for (const std::string& name : shared_->variables)
     shared_->used.push_back(used.count(name) > 0);
+  for (const auto& constant : shared_->constants)
+    if (used.count(constant.first) > 0) shared_->constants_used.push_back(constant.first);
   shared_->give_back(std::move(evaluator));
 }
 
@@ -166,6 +179,8 @@ bool Expression::uses(std::string_view variable) const {
 bool Expression::is_constant() const {
   return std::none_of(shared_->used.begin(), shared_->used.end(), [](bool b) { return b; });
 }
+
+std::vector<std::string> Expression::constants_used() const { return shared_->constants_used; }
 
 const std::string& Expression::text() const { return shared_->text; }
 const std::vector<std::string>& Expression::variables() const { return shared_->variables; }

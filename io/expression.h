@@ -20,6 +20,7 @@
 #include <memory>
 #include <span>
 #include <stdexcept>
+#include <utility>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -48,12 +49,17 @@ class ExpressionError : public std::runtime_error {
   std::string reason_;
 };
 
+// Named numbers an expression may read besides its variables (a config's `constants:`).
+using ExpressionConstants = std::vector<std::pair<std::string, double>>;
+
 class Expression {
  public:
   // Parses `text` (checked here: errors throw ExpressionError) over the named variables.
   // A variable may not be named like a constant or function (`e`, `pi`, `exp`, ...).
+  // `constants` are named numbers, named like no variable.
   explicit Expression(std::string text,
-                      std::vector<std::string> variables = {"x", "y", "z", "t"});
+                      std::vector<std::string> variables = {"x", "y", "z", "t"},
+                      ExpressionConstants constants = {});
 
   // One value per row of `points`; column j holds variable j. Missing trailing columns
   // are 0 (a 2-D point sets x and y, with z = t = 0); more columns than variables is
@@ -66,8 +72,10 @@ class Expression {
 
   // Whether the expression mentions `variable` (e.g. `t` to tell time dependence).
   bool uses(std::string_view variable) const;
-  // True if the expression mentions none of its variables.
+  // True if the expression mentions none of its variables (constants do not count).
   bool is_constant() const;
+  // The names of `constants` it reads.
+  std::vector<std::string> constants_used() const;
   const std::string& text() const;
   const std::vector<std::string>& variables() const;
 

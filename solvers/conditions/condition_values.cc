@@ -6,7 +6,8 @@
 namespace nfield::solvers {
 
 std::vector<io::Expression> channel_expressions(const io::ConfigNode& node, std::string_view key,
-                                                const Domain& domain, int output_dim) {
+                                                const Domain& domain, int output_dim,
+                                                const io::ExpressionConstants& constants) {
   std::vector<io::Expression> out;
   if (node.has_list(key)) {
     const io::ConfigNode list = node.child(key);
@@ -16,14 +17,14 @@ std::vector<io::Expression> channel_expressions(const io::ConfigNode& node, std:
       const io::ConfigNode element = list.at(c);
       const std::string text = element.as<std::string>();
       try {
-        out.push_back(io::Expression(text.empty() ? "0" : text, domain.expression_variables()));
+        out.push_back(io::Expression(text.empty() ? "0" : text, domain.expression_variables(), constants));
       } catch (const io::ExpressionError& e) {
         throw element.error(e.what());  // a config error, located at the list element
       }
     }
     return out;
   }
-  io::Expression e = node.get_expression(key, domain.expression_variables());
+  io::Expression e = node.get_expression(key, domain.expression_variables(), constants);
   for (int c = 0; c < output_dim; ++c) out.push_back(c == 0 ? e : io::Expression("0", domain.expression_variables()));
   return out;
 }

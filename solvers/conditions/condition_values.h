@@ -14,9 +14,11 @@
 
 namespace nfield::solvers {
 
-// Per-channel expressions from a `value` entry (one string, or a list of output_dim).
+// Per-channel expressions from a `value` entry (one string, or a list of output_dim), over
+// the domain's variables and `constants` (problem: pde's).
 std::vector<io::Expression> channel_expressions(const io::ConfigNode& node, std::string_view key,
-                                                const Domain& domain, int output_dim);
+                                                const Domain& domain, int output_dim,
+                                                const io::ExpressionConstants& constants = {});
 
 // The faces a condition item's `on` names (a face, a list of faces, or boundary); errors
 // name the item's `on` and list the valid faces.

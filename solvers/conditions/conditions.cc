@@ -19,16 +19,17 @@ LinearResidual value_residual(const Eigen::MatrixXd& target) {
 }  // namespace
 
 std::vector<LossTerm> condition_terms(const io::ConfigNode& conditions, const Domain& domain,
-                                      int output_dim, std::shared_ptr<const Ansatz>* ansatz) {
+                                      int output_dim, std::shared_ptr<const Ansatz>* ansatz,
+                                      const io::ExpressionConstants& constants) {
   std::vector<LossTerm> terms;
   if (conditions.is_null()) return terms;
   conditions.require(conditions.is_sequence(), "expected a list of conditions");
-  if (ansatz) *ansatz = read_ansatz(conditions, domain, output_dim);
+  if (ansatz) *ansatz = read_ansatz(conditions, domain, output_dim, constants);
   for (std::size_t i = 0; i < conditions.size(); ++i) {
     const io::ConfigNode item = conditions.at(i);
     if (item.get_choice("enforce", {"soft", "hard"}, "soft") == "hard") {
       if (!ansatz)
-        throw item.error("enforce", "this problem does not support enforce: hard (poisson and "
+        throw item.error("enforce", "this problem does not support enforce: hard (poisson, pde and "
                                     "wave do); use enforce: soft");
       item.reject_unknown_keys();
       continue;  // enforced by the ansatz, no loss term
@@ -38,7 +39,7 @@ std::vector<LossTerm> condition_terms(const io::ConfigNode& conditions, const Do
     LossTerm term;
     term.weight = item.get_or("weight", 1.0);
     item.require("weight", term.weight >= 0, "expected a weight >= 0");
-    const auto values = channel_expressions(item, "value", domain, output_dim);
+    const auto values = channel_expressions(item, "value", domain, output_dim, constants);
     if (initial) {
       if (!domain.has_time()) throw item.error("on", "'initial' needs a domain with a time interval");
       const std::string type = item.get_choice("type", {"value", "velocity"});

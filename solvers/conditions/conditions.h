@@ -14,7 +14,7 @@
 // `enforce: hard` (default soft) makes a Dirichlet or initial value/velocity condition exact
 // instead: no loss term, the field's output becomes u = A + D·N (solvers/conditions/hard_constraints.h
 // has the ansatz and its limits). Neumann conditions stay soft. Only problems that pass the
-// `ansatz` out-parameter (poisson, wave) accept hard items; others reject them.
+// `ansatz` out-parameter (poisson, wave, pde) accept hard items; others reject them.
 #pragma once
 
 #include <memory>
@@ -27,8 +27,10 @@
 namespace nfield::solvers {
 
 class Ansatz;
+// `constants`: named numbers the value expressions may read (problem: pde's `constants`).
 std::vector<LossTerm> condition_terms(const io::ConfigNode& conditions, const Domain& domain,
                                       int output_dim,
-                                      std::shared_ptr<const Ansatz>* ansatz = nullptr);
+                                      std::shared_ptr<const Ansatz>* ansatz = nullptr,
+                                      const io::ExpressionConstants& constants = {});
 
 }  // namespace nfield::solvers

@@ -419,7 +419,7 @@ std::string point_text(const Eigen::MatrixXd& x, Eigen::Index r) {
 }  // namespace
 
 std::shared_ptr<const Ansatz> read_ansatz(const io::ConfigNode& conditions, const Domain& domain,
-                                          int output_dim) {
+                                          int output_dim, const io::ExpressionConstants& constants) {
   if (conditions.is_null() || !conditions.is_sequence()) return nullptr;
   std::optional<Ansatz::Dirichlet> dirichlet;
   std::optional<io::ConfigNode> dirichlet_item, value_item, velocity_item;
@@ -432,7 +432,7 @@ std::shared_ptr<const Ansatz> read_ansatz(const io::ConfigNode& conditions, cons
                  "a hard condition (enforce: hard) is no loss term and takes no weight");
     const bool initial = item.has("on") && !item.has_list("on") &&
                          Registry<int>::lower(item.get<std::string>("on")) == "initial";
-    const auto values = channel_expressions(item, "value", domain, output_dim);
+    const auto values = channel_expressions(item, "value", domain, output_dim, constants);
     if (initial) {
       if (!domain.has_time()) throw item.error("on", "'initial' needs a domain with a time interval");
       const std::string type = item.get_choice("type", {"value", "velocity"});

@@ -208,7 +208,7 @@ class Ansatz {
 // incompatible initial data on hard faces. Problems that pass no `ansatz` out-parameter to
 // condition_terms reject hard items.
 std::shared_ptr<const Ansatz> read_ansatz(const io::ConfigNode& conditions, const Domain& domain,
-                                          int output_dim);
+                                          int output_dim, const io::ExpressionConstants& constants = {});
 
 // A residual on u = A + D N: transforms the network streams before `inner` and chains its
 // adjoint back. A and D streams are precomputed for the point set it is built for.

@@ -14,6 +14,7 @@ void register_problems(Registry<ProblemFactory>& registry) {
   registry.add("autoint_1d", make_autoint_1d);
   registry.add("autoint_nerf", make_autoint_nerf);
   registry.add("fit", make_fit);
+  registry.add("pde", make_pde);
 }
 
 namespace {

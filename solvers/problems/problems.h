@@ -19,6 +19,7 @@ std::unique_ptr<Problem> make_nerf(const ProblemContext& context);
 std::unique_ptr<Problem> make_autoint_1d(const ProblemContext& context);
 std::unique_ptr<Problem> make_autoint_nerf(const ProblemContext& context);
 std::unique_ptr<Problem> make_fit(const ProblemContext& context);
+std::unique_ptr<Problem> make_pde(const ProblemContext& context);
 
 void register_problems(Registry<ProblemFactory>& registry);
 

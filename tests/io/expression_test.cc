@@ -142,5 +142,18 @@ TEST(Expression, ConcurrentEvaluationMatchesSerial) {
   for (int k = 0; k < 8; ++k) EXPECT_EQ(mismatches[k], 0) << "thread " << k;
 }
 
+TEST(Expression, NamedConstants) {
+  const Expression e("nu*x + 2", {"x", "t"}, {{"nu", 0.5}, {"mu", 3}});
+  Eigen::MatrixXd points(2, 2);
+  points << 4, 0, -2, 1;
+  EXPECT_EQ(e.evaluate(points), Eigen::Vector2d(4, 1));
+  EXPECT_EQ(e.constants_used(), std::vector<std::string>{"nu"});
+  EXPECT_TRUE(e.uses("x"));
+  EXPECT_FALSE(Expression("nu*mu", {"x"}, {{"nu", 0.5}, {"mu", 3}}).uses("x"));
+  EXPECT_TRUE(Expression("nu*mu", {"x"}, {{"nu", 0.5}, {"mu", 3}}).is_constant());
+  EXPECT_THROW(Expression("x", {"x"}, {{"x", 1}}), ExpressionError);
+  EXPECT_THROW(Expression("q", {"x"}, {{"nu", 1}}), ExpressionError);
+}
+
 }  // namespace
 }  // namespace nfield::io
