@@ -16,6 +16,8 @@
 //     - {on: initial, type: value, value: "-sin(pi*x)"}
 //   reference:
 //     exact: {u: "sin(pi*x)*exp(-t)"} # optional, an expression per output: error metrics
+//   # or a solution the project computes: `solution: burgers_sine, nu: nu`, the Cole–Hopf
+//   # solution of u_t + u u_x = ν u_xx from −sin πx (solvers/problems/burgers_reference.h)
 //
 // A residual item is a string or {expr, weight (≥ 0, default 1), name (default pde, pde_1,
 // …; residual_i for one with `on`), batch (the training.batch entry; default interior,
@@ -38,6 +40,7 @@
 #include "io/compiled_expression.h"
 #include "solvers/conditions/condition_values.h"
 #include "solvers/conditions/conditions.h"
+#include "solvers/problems/burgers_reference.h"
 #include "solvers/problems/pde_residual.h"
 #include "solvers/problems/pde_streams.h"
 #include "solvers/problems/problems.h"
@@ -134,8 +137,13 @@ class Pde final : public Problem {
   }
 
   std::shared_ptr<const Ansatz> ansatz() const override { return ansatz_; }
-  bool has_exact() const override { return !exact_.empty(); }
+  bool has_exact() const override { return !exact_.empty() || burgers_; }
   Eigen::MatrixXd exact(const Eigen::MatrixXd& x) const override {
+    if (burgers_) {
+      Eigen::MatrixXd xt(x.rows(), 2);
+      xt << x.col(0), x.col(domain_.time_column());
+      return burgers_sine_solution(xt, *burgers_);
+    }
     Eigen::MatrixXd out(x.rows(), output_dim());
     std::vector<double> scratch;
     for (int c = 0; c < output_dim(); ++c)
@@ -341,6 +349,7 @@ class Pde final : public Problem {
 
   // `reference.exact`: an expression per output ({u: "…"}), or one string for one output.
   void read_reference(const io::ConfigNode& node) {
+    if (node.has("solution")) return read_named_solution(node);
     const io::ExpressionScope s = scope(false);
     auto compile = [&](const io::ConfigNode& parent, const std::string& key) {
       try {
@@ -368,6 +377,34 @@ class Pde final : public Problem {
     node.reject_unknown_keys();
   }
 
+  // `reference: {solution: burgers_sine, nu: EXPRESSION}`: on x ∈ [−1, 1] (any part of it)
+  // and t ∈ [0, 10], one output.
+  void read_named_solution(const io::ConfigNode& node) {
+    node.get_choice("solution", {"burgers_sine"});
+    node.require("solution", domain_.space_dim() == 1 && domain_.has_time() && output_dim() == 1,
+                 "burgers_sine needs one output over one space variable and time (domain: lower, upper "
+                 "of size 1 and time)");
+    node.require("solution", domain_.time().first >= 0 && domain_.time().second <= 10,
+                 "burgers_sine is computed for t in [0, 10]");
+    io::ExpressionScope constant_scope;
+    constant_scope.constants = constants_;
+    constant_scope.valid_names = "constants: " + (constants_.empty() ? std::string("none") : constant_names());
+    double nu = NAN;
+    try {
+      const io::CompiledExpression e(node.get<std::string>("nu"), constant_scope);
+      std::vector<double> scratch;
+      nu = e.evaluate<double>(nullptr, scratch);
+      note_constants(e);
+    } catch (const io::ExpressionError& e) {
+      throw node.expression_error("nu", e);
+    }
+    BurgersSineOptions options;
+    options.nu = nu;
+    node.require("nu", nu >= 1e-4 && nu <= 1e3, "expected a viscosity in [1e-4, 1e3]");
+    burgers_ = options;
+    node.reject_unknown_keys();
+  }
+
   Domain domain_;
   std::vector<std::string> outputs_;
   std::vector<std::pair<std::string, double>> constants_;
@@ -376,6 +413,7 @@ class Pde final : public Problem {
   std::vector<LossTerm> conditions_;
   std::shared_ptr<const Ansatz> ansatz_;
   std::vector<io::CompiledExpression> exact_;
+  std::optional<BurgersSineOptions> burgers_;  // reference.solution: burgers_sine
 };
 
 }  // namespace

@@ -15,6 +15,7 @@
 #include <string>
 
 #include "fields/field.h"
+#include "solvers/problems/burgers_reference.h"
 #include "solvers/problems/pde_residual.h"
 #include "solvers/problems/pde_streams.h"
 #include "solvers/run.h"
@@ -464,6 +465,34 @@ conditions:
   terms[1].residual(x)->evaluate(0, layout, zero, r);
   EXPECT_TRUE(r.col(0).isApprox(-3 * x.col(1), 1e-14));  // u − g with u = 0, g = a t
   ASSERT_NE(setup.problem->ansatz(), nullptr);
+}
+
+// reference.solution: burgers_sine gives the error metrics against the Cole–Hopf solution at
+// the config's ν; it needs one output over x and t.
+TEST(Pde, BurgersReferenceSolution) {
+  const char* text = R"yaml(problem: pde
+domain: {lower: [-1], upper: [1], time: [0, 1]}
+constants: {nu: "0.01/pi"}
+equation:
+  residuals: ["u_t + u*u_x - nu*u_xx"]
+reference: {solution: burgers_sine, nu: nu}
+)yaml";
+  const RunSetup setup = load_run(write_config("burgers_reference", text), {});
+  ASSERT_TRUE(setup.problem->has_exact());
+  Eigen::MatrixXd x(3, 2);
+  x << -0.5, 0.0, 0.3, 0.5, 0.01, 1.0;
+  const Eigen::MatrixXd u = setup.problem->exact(x);
+  for (Eigen::Index i = 0; i < x.rows(); ++i)
+    EXPECT_EQ(u(i, 0), burgers_sine_solution(x(i, 0), x(i, 1), {.nu = 0.01 / std::numbers::pi}));
+  EXPECT_DOUBLE_EQ(u(0, 0), std::sin(std::numbers::pi * 0.5));
+  std::string two_d = text;
+  two_d.replace(two_d.find("{lower: [-1], upper: [1]"), 24, "{lower: [-1, 0], upper: [1, 1]");
+  testutil::expect_located_error(write_config("burgers_reference_2d", two_d),
+                                 {6, 23, "reference.solution", "burgers_sine needs one output over one space variable"});
+  std::string other = text;
+  other.replace(other.find("burgers_sine"), 12, "burgers_cos");
+  testutil::expect_located_error(write_config("burgers_reference_name", other),
+                                 {6, 23, "reference.solution", "burgers_sine"});
 }
 
 const char* kTwoOutputs = R"yaml(problem: pde
