@@ -5,7 +5,12 @@ BUILD ?= build
 JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?=
 
-.PHONY: all deps configure build demo test bench bench-torch bench-nerf clean
+# test-sanitize: the tests labelled `sanitize` (some of every folder) in a separate build
+# under AddressSanitizer and UBSan, at -O1 and without MPI, Python, benchmarks or examples.
+SANITIZE ?= address,undefined
+SANITIZE_BUILD ?= build-sanitize
+
+.PHONY: all deps configure build demo test test-sanitize bench bench-torch bench-nerf clean
 
 all: build
 
@@ -26,6 +31,17 @@ demo: build
 test: build
 	@cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 
+$(SANITIZE_BUILD)/CMakeCache.txt: | deps
+	@cmake -S . -B $(SANITIZE_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+	  "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG" -DNFIELD_SANITIZE=$(SANITIZE) \
+	  -DNFIELD_MPI=OFF -DNFIELD_PYTHON=OFF -DNFIELD_BUILD_BENCH=OFF -DNFIELD_BUILD_EXAMPLES=OFF \
+	  $(CMAKE_FLAGS) >/dev/null
+
+# print_stacktrace: where a UBSan report (fatal: -fno-sanitize-recover) came from.
+test-sanitize: $(SANITIZE_BUILD)/CMakeCache.txt
+	@cmake --build $(SANITIZE_BUILD) -j $(JOBS) --target nfield_sanitize_tests
+	@cd $(SANITIZE_BUILD) && UBSAN_OPTIONS=print_stacktrace=1 ctest --output-on-failure -j $(JOBS) -L sanitize
+
 bench: build
 	@$(BUILD)/bin/nfield bench
 
@@ -38,4 +54,4 @@ bench-nerf: build
 	@bash bench/compare_nerf.sh $(BUILD)
 
 clean:
-	@rm -rf $(BUILD)
+	@rm -rf $(BUILD) $(SANITIZE_BUILD)

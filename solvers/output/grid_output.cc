@@ -45,6 +45,14 @@ Eigen::MatrixXd frame_points(const Domain& domain, const Eigen::MatrixXd& space,
 // not report the largest of its finite errors (std::max drops a NaN second argument).
 double max_or_nan(double a, double b) { return std::isnan(a) || std::isnan(b) ? std::numeric_limits<double>::quiet_NaN() : std::max(a, b); }
 
+// u at a frame's points from a pass of values alone. The error after each stage (grid_error)
+// and the final outputs read u from this one computation, so that the last stage's error is
+// the run's final error to the bit: a pass that carries tangents too stacks them with the
+// values into taller products, whose rounding may differ (it did under the sanitizer build).
+Eigen::MatrixXd values_at(const StreamEvaluator& evaluate, const Domain& domain, const Eigen::MatrixXd& x) {
+  return evaluate(autodiff::StreamLayout(autodiff::StreamSpec::values(domain.input_dim())), x).stream(0);
+}
+
 // Sums of |u − u*|² and |u*|² over the points the problem's error mask keeps.
 struct ErrorSums {
   double error_sq = 0, exact_sq = 0, max_abs = 0;
@@ -74,7 +82,6 @@ GridMetrics grid_error(const Problem& problem, const StreamEvaluator& evaluate,
   const Domain& domain = problem.domain();
   const io::Grid grid = io::make_grid(domain.lower(), domain.upper(), output.grid);
   const Eigen::MatrixXd space = grid.points(domain.space_dim());
-  const autodiff::StreamLayout layout(autodiff::StreamSpec::values(domain.input_dim()));
   const int frames = domain.has_time() ? output.frames : 1;
   ErrorSums sums;
   for (int k = 0; k < frames; ++k) {
@@ -82,7 +89,7 @@ GridMetrics grid_error(const Problem& problem, const StreamEvaluator& evaluate,
     const Eigen::MatrixXd x = frame_points(domain, space, k, frames, &t);
     const Eigen::MatrixXd exact = problem.exact(x);
     ErrorSums frame;
-    frame.add(evaluate(layout, x).stream(0) - exact, exact, problem.error_mask(x));
+    frame.add(values_at(evaluate, domain, x) - exact, exact, problem.error_mask(x));
     sums.merge(frame);
     if (domain.has_time()) {
       metrics.frame_rel_l2.push_back(frame.rel_l2());
@@ -122,7 +129,7 @@ GridMetrics write_grid_outputs(const Problem& problem, const StreamEvaluator& ev
     const Eigen::MatrixXd x = frame_points(domain, space, k, frames, &t);
     io::PointArrays arrays;
     const autodiff::Streams<double> streams = evaluate(gradient_layout, x);
-    const Eigen::MatrixXd u = streams.stream(0);
+    const Eigen::MatrixXd u = values_at(evaluate, domain, x);
     for (int c = 0; c < channels; ++c) {
       arrays[names[c]] = u.col(c);
       Eigen::MatrixXd g(n, d);
