@@ -249,7 +249,9 @@ class Helmholtz final : public Problem {
     } else {
       pde.spec = autodiff::StreamSpec::laplacian(d);
     }
-    pde.residual = [this](const Eigen::MatrixXd& x) { return residual(x); };
+    pde.residual = [this, layout = autodiff::StreamLayout(pde.spec)](const Eigen::MatrixXd& x) {
+      return residual(layout, x);
+    };
     std::vector<LossTerm> terms{pde};
     if (point_source_ && source_weight_ > 0) {
       LossTerm near = pde;
@@ -300,23 +302,22 @@ class Helmholtz final : public Problem {
     return f;
   }
 
-  std::unique_ptr<Residual> residual(const Eigen::MatrixXd& x) const {
+  std::unique_ptr<Residual> residual(const autodiff::StreamLayout& layout, const Eigen::MatrixXd& x) const {
     const int d = domain_.space_dim();
     const Eigen::Index n = x.rows();
     const Eigen::MatrixXd f = source_values(x);
     const double k2 = k_ * k_;
     std::vector<LinearResidual::Term> terms;
     if (pml_width_ <= 0) {
-      // Δu + k²u − f, channel by channel: the Laplacian is stream 1 + d.
-      const int lap = 1 + d;
+      // Δu + k²u − f, channel by channel.
       for (int c = 0; c < output_dim(); ++c) {
-        terms.push_back({c, lap, c, Eigen::VectorXd::Ones(1)});
-        if (k2 != 0) terms.push_back({c, 0, c, Eigen::VectorXd::Constant(1, k2)});
+        terms.push_back({c, layout.op(0), c, Eigen::VectorXd::Ones(1)});
+        if (k2 != 0) terms.push_back({c, layout.value(), c, Eigen::VectorXd::Constant(1, k2)});
       }
       return std::make_unique<LinearResidual>(std::move(terms), f);
     }
-    // Stretched operator: per-point complex coefficients of u_jj (stream 1 + d + j),
-    // u_j (stream 1 + j) and u (stream 0), and the right-hand side P f.
+    // Stretched operator: per-point complex coefficients of u_jj (operator stream j), u_j
+    // (tangent j) and u, and the right-hand side P f.
     std::vector<Eigen::VectorXcd> second(d, Eigen::VectorXcd(n)), first(d, Eigen::VectorXcd(n));
     Eigen::VectorXcd zeroth(n);
     Eigen::MatrixXd rhs(n, 2);
@@ -354,10 +355,10 @@ class Helmholtz final : public Problem {
       }
     };
     for (int a = 0; a < d; ++a) {
-      add(1 + d + a, second[a]);
-      if (!first[a].isZero(0)) add(1 + a, first[a]);
+      add(layout.op(a), second[a]);
+      if (!first[a].isZero(0)) add(layout.tangent(a), first[a]);
     }
-    if (k2 != 0) add(0, zeroth);
+    if (k2 != 0) add(layout.value(), zeroth);
     return std::make_unique<LinearResidual>(std::move(terms), rhs);
   }
 
