@@ -82,9 +82,9 @@
 //
 //   Both have the same zeros, but the multiplied form scales the residual by |P|, up to
 //   |1 + i a/k|² = 26 in the layer's corners (a = 100, k = 20), so its squared loss weights the
-//   layer up to ~700 times the physical region and training spends itself there: on
-//   configs/helmholtz_pml.yaml (double, 1500 Adam + 500 L-BFGS) rel_l2 0.88 multiplied
-//   against 0.38 divided. Divided, the coefficients are bounded by their values outside. A Dirichlet condition u = 0 on the outer faces (conditions:) closes the
+//   layer up to ~700 times the physical region and training spends itself there
+//   (configs/helmholtz_pml.yaml: docs/experiments.md). Divided, the coefficients are
+//   bounded by their values outside. A Dirichlet condition u = 0 on the outer faces (conditions:) closes the
 //   layer; what it reflects comes back damped by e^{−2aw/3}.
 //   error_mask() leaves out the layer and the disk around the source.
 #include <cmath>

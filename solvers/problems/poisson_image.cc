@@ -30,7 +30,7 @@
 //   residual             the strong form Δu − g at random points, with the `flux` term ∂u/∂n
 //                        on the border. Its Hessian weighs an error of frequency ω by ω⁴:
 //                        the fine detail converges first and the smooth shading is nearly
-//                        free, and noisy in a random batch (13.9 dB on camera.png at 256²).
+//                        free, and noisy in a random batch (docs/experiments.md).
 //   energy               the Ritz energy of the Neumann problem Δu = g, ∂u/∂n = 0, written
 //                        as the least squares ∇u − q with q a zero-flux field of divergence
 //                        g built from values of g alone (io::BSplineLaplacianFlux): ∫ g·u =
