@@ -90,7 +90,8 @@ compare_metrics() {
   python3 - "$1" "$2" <<'EOF'
 import json, re, sys
 # Wall times differ from run to run; what was computed does not.
-untimed = re.compile(r"(^|_)(wall_s|seconds|s|ms|ms_median|step_ms_median)$|(^|_)time(_|$)|_ms_|nfield_version")
+untimed = re.compile(r"(^|_)(wall_s|seconds|s|ms|ms_median|step_ms_median)$|(^|_)(time|ms|us)(_|$)"
+                     r"|speedup|nfield_version")
 def flatten(value, key=""):
     if isinstance(value, dict):
         for k, v in value.items():
