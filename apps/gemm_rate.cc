@@ -74,8 +74,8 @@ double gemm_gflops(const std::vector<GemmShape>& shapes, Eigen::Index rows, int 
   };
   const double split = time(row_split);
   // Eigen's own threading of the weight adjoint Z̄ᵀA (a small result summed over many rows)
-  // ran at 1–2 % of its one-thread rate with two threads on the 2-core machine: a probe on
-  // an eighth of the rows tells whether it can win before the full repeats are spent on it.
+  // can run far below its one-thread rate (docs/experiments.md): a probe on an eighth of the
+  // rows tells whether it can win before the full repeats are spent on it.
   const Eigen::Index probe = std::max<Eigen::Index>(rows / 8, 1);
   eigen_threaded(probe);
   const double probe_rate = gemm_flops(shapes, probe) / seconds_of([&] { eigen_threaded(probe); }) * 1e-9;

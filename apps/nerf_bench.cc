@@ -14,6 +14,7 @@
 #include "fields/field.h"
 #include "integrators/cone_frustums.h"
 #include "integrators/multiview_dataset.h"
+#include "integrators/radiance_activations.h"
 #include "integrators/ray_batch.h"
 #include "integrators/ray_sampling.h"
 #include "integrators/scene_box.h"
@@ -85,7 +86,7 @@ FrameTiming time_frame(const solvers::RunSetup& setup, const fields::Field<float
   const double near = setup.root.child("scene").get_or("near", 0.0);
   const io::ConfigNode render = setup.root.child_or_empty("render");
   const int samples_per_ray = render.get_or("samples", 64);
-  const bool truncated_exp = render.get_or("density", "softplus") == "trunc_exp";
+  const integrators::DensityActivation density{render.get_or("density", "softplus") == "trunc_exp"};
   const int width = views.intrinsics.width, stride = options.render_stride;
   std::vector<Eigen::Index> kept;
   for (Eigen::Index p = 0; p < views.pixels_per_image(); ++p)
@@ -112,11 +113,8 @@ FrameTiming time_frame(const solvers::RunSetup& setup, const fields::Field<float
       x << gaussians.mean, integrators::sample_directions(rays, samples), gaussians.variance;
     }
     const Eigen::MatrixXd out = field.values(x.cast<float>()).cast<double>();
-    const Eigen::VectorXd sigma = out.col(0).unaryExpr([truncated_exp](double s) {
-      if (truncated_exp) return std::exp(std::min(s, 15.0));
-      return s > 20 ? s : std::log1p(std::exp(s));
-    });
-    const Eigen::MatrixXd rgb = out.rightCols(3).unaryExpr([](double z) { return 1 / (1 + std::exp(-z)); });
+    const Eigen::VectorXd sigma = out.col(0).unaryExpr([density](double s) { return density.value(s); });
+    const Eigen::MatrixXd rgb = out.rightCols(3).unaryExpr(&integrators::colour_activation);
     const auto image = integrators::render<double>(samples, sigma, rgb, views.background.transpose());
     ms.push_back(1e3 * seconds_since(start));
     timing.pixels = image.color.rows();

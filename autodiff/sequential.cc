@@ -146,7 +146,7 @@ int thread_count(int requested) { return requested > 0 ? requested : omp_get_max
 
 // The blocks already split the work over the threads: each block's matrix products must
 // run on its own thread. Eigen would otherwise open a nested team inside a team of one
-// thread (threads = 1), which costs 3–4× per step. The thread count set here belongs to the
+// thread (threads = 1), which slows a step several times over (docs/experiments.md). The thread count set here belongs to the
 // calling thread's task inside the parallel region (OpenMP's nthreads-var is a per-task
 // setting), so nothing outside the region changes and concurrent passes do not race.
 void single_threaded_products_in_this_task() { omp_set_num_threads(1); }

@@ -21,6 +21,7 @@
 
 #include "fields/field.h"
 #include "integrators/multiview_dataset.h"
+#include "integrators/radiance_activations.h"
 #include "integrators/ray_batch.h"
 #include "integrators/ray_sampling.h"
 #include "integrators/scene_box.h"
@@ -33,9 +34,10 @@ using namespace nfield;
 
 namespace {
 
-// σ = softplus(s) and c = sigmoid(raw) of the field's four raw outputs; their derivatives.
-double softplus(double s) { return s > 20 ? s : std::log1p(std::exp(s)); }
-double sigmoid(double z) { return 1.0 / (1.0 + std::exp(-z)); }
+// σ = softplus(s) of the field's density output (the default DensityActivation).
+const integrators::DensityActivation kDensity;
+double density(double s) { return kDensity.value(s); }
+double density_derivative(double s) { return kDensity.derivative(s); }
 
 // The network's inputs [x, d] for every sample of every ray.
 Eigen::MatrixXf sample_inputs(const integrators::Rays<double>& rays,
@@ -92,8 +94,8 @@ int main(int argc, char** argv) {
     const auto block = integrators::ray_range(samples, static_cast<Eigen::Index>(k0), static_cast<Eigen::Index>(k1));
     const Eigen::Index begin = samples.offsets[k0], n = block.size();
     const Eigen::MatrixXd raw = out.stream(0).middleRows(begin - first, n).cast<double>();
-    const Eigen::VectorXd sigma = raw.col(0).unaryExpr(&softplus);
-    const Eigen::MatrixXd rgb = raw.rightCols(3).unaryExpr(&sigmoid);
+    const Eigen::VectorXd sigma = raw.col(0).unaryExpr(&density);
+    const Eigen::MatrixXd rgb = raw.rightCols(3).unaryExpr(&integrators::colour_activation);
     const Eigen::MatrixXd white = Eigen::MatrixXd::Ones(1, 3);
     const auto image = integrators::render<double>(block, sigma, rgb, white);
     const Eigen::MatrixXd r = image.color - target.middleRows(k0, k1 - k0);
@@ -103,7 +105,7 @@ int main(int argc, char** argv) {
     Eigen::MatrixXd rgb_bar(n, 3);
     integrators::render_backward<double>(block, sigma, rgb, white, bar, sigma_bar, rgb_bar);
     auto raw_bar = adjoint.stream(0).middleRows(begin - first, n);
-    raw_bar.col(0) = (sigma_bar.array() * raw.col(0).unaryExpr(&sigmoid).array()).cast<float>();
+    raw_bar.col(0) = (sigma_bar.array() * raw.col(0).unaryExpr(&density_derivative).array()).cast<float>();
     raw_bar.rightCols(3) = (rgb_bar.array() * rgb.array() * (1 - rgb.array())).cast<float>();
     return scale * r.squaredNorm();
   });
@@ -136,8 +138,8 @@ int main(int argc, char** argv) {
   integrators::clip_to_box(pixels.rays, box);
   const auto view = integrators::stratified_samples(pixels.rays, {samples_per_ray, false}, rng);
   const Eigen::MatrixXd raw = field.values(sample_inputs(pixels.rays, view)).cast<double>();
-  const auto image = integrators::render<double>(view, raw.col(0).unaryExpr(&softplus),
-                                                 raw.rightCols(3).unaryExpr(&sigmoid),
+  const auto image = integrators::render<double>(view, raw.col(0).unaryExpr(&density),
+                                                 raw.rightCols(3).unaryExpr(&integrators::colour_activation),
                                                  Eigen::MatrixXd::Ones(1, 3));
   io::Image png{test.intrinsics.width, test.intrinsics.height, 3, image.color.cast<float>()};
   std::filesystem::create_directories(out_dir);

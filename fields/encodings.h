@@ -34,8 +34,8 @@
 // unchanged at that moment. A network that can form a kink on the plane from the start can
 // also form the wrong one: on the two-layer Eikonal example (configs/accuracy_eikonal_layered
 // .yaml) Adam with cusp features put a steep layer on the fast side of the interface in place
-// of the head wave below it (rel_l2 1.3e-2); with Adam on x alone and the features entering
-// for the Levenberg–Marquardt stages, 1.6e-3 (seed 0; same residual, no interface term).
+// of the head wave below it, which features entering for the Levenberg–Marquardt stages
+// avoid (figures: docs/experiments.md).
 //
 // The matrix B (or the rows e_a of a cusp encoding) is part of the field and saved with it;
 // it is not trained.

@@ -13,6 +13,7 @@
 #include "fields/field_type.h"
 #include "fields/radiance_network.h"
 #include "io/registry.h"
+#include "io/text.h"
 
 namespace nfield::fields {
 namespace {
@@ -145,7 +146,7 @@ FieldTypeRegistry& field_types() {
 
 InitialBounds FieldType::initial_bounds(const FieldOptions& o, int, Eigen::Index in,
                                         Eigen::Index out) const {
-  const bool relu = Registry<int>::lower(o.activation) == "relu";
+  const bool relu = io::to_lower(o.activation) == "relu";
   return {relu ? std::sqrt(6.0 / in) : std::sqrt(6.0 / (in + out)), 0.0};
 }
 

@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "io/registry.h"
+#include "io/text.h"
 
 namespace nfield::fields {
 
@@ -22,10 +22,10 @@ constexpr int kMaxCorners = 1 << (2 * kMaxDim);  // 4^4
 constexpr std::uint32_t kPrimes[kMaxDim] = {1u, 2654435761u, 805459861u, 3674653429u};
 
 bool is_smoothstep(const EncodingOptions& o) {
-  return Registry<int>::lower(o.interpolation) == "smoothstep";
+  return io::to_lower(o.interpolation) == "smoothstep";
 }
 
-bool is_cubic(const EncodingOptions& o) { return Registry<int>::lower(o.interpolation) == "cubic"; }
+bool is_cubic(const EncodingOptions& o) { return io::to_lower(o.interpolation) == "cubic"; }
 
 // out = a·b for series of n coefficients, truncated.
 template <typename Scalar>

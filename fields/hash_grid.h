@@ -29,10 +29,8 @@
 // reproduction holds in the outer cells too), row(v) = Σ_j (v_j + 1)(N_l + 4)^j while
 // (N_l + 4)^d ≤ T, else the same hash of v + 1. Cost: 4^d vertices per level and point
 // instead of 2^d (16 in 2D, 64 in 3D, 256 in 4D), in the table gathers, their weights and
-// the scatter of the reverse pass alike. Measured in 2D, one thread, 16 levels of 16 … 256
-// cells before a layer of 64: a training step on values (configs/fit_image.yaml) 2.7× as
-// long as with `linear`, one on the Laplacian and its flux 2.6× as long as with
-// `smoothstep`; in 3D, 8× the vertices of 2D per level against 4× for linear.
+// the scatter of the reverse pass alike, so cubic levels are for where their curvature is
+// needed (measured cost: docs/experiments.md).
 //
 // Why x may be kept: inside a cell a smoothstep feature's second derivative along an axis
 // has zero mean (its slope vanishes on both faces), so mean curvature, such as a Poisson
@@ -44,7 +42,7 @@
 // Why the half-cell offset: smoothstep has zero slope on cell faces, so a level with faces
 // on the box boundary has ∂y_l/∂n = 0 there, and with every level so aligned the field is
 // forced to ∂u/∂n = 0 on the whole boundary. A Dirichlet problem whose solution has a normal
-// derivative there (configs/poisson_2d.yaml) then cannot be fitted (rel_l2 0.6 after Adam).
+// derivative there (configs/poisson_2d.yaml) then cannot be fitted.
 // Offset, the boundary lies mid-cell on every level.
 //
 // Streams. Every output stream of a level is Σ_v κ_v T_l[row(v)], one scalar κ per corner

@@ -9,7 +9,7 @@
 
 #include "fields/encoding_type.h"
 #include "fields/hash_grid.h"
-#include "io/registry.h"
+#include "io/text.h"
 
 namespace nfield::fields {
 namespace {
@@ -47,7 +47,7 @@ class HashGridType final : public EncodingTypeOf<HashGridType> {
     check_range("finest_resolution", o.finest_resolution, o.base_resolution, kMaxResolution);
     if (!(o.init_scale > 0) || !std::isfinite(o.init_scale))
       reject("init_scale", std::to_string(o.init_scale), "must be a finite number > 0");
-    const std::string kind = Registry<int>::lower(o.interpolation);
+    const std::string kind = io::to_lower(o.interpolation);
     if (std::find(interpolations().begin(), interpolations().end(), kind) == interpolations().end())
       reject("interpolation", "'" + o.interpolation + "'", "must be linear, smoothstep or cubic");
   }
@@ -83,7 +83,7 @@ class HashGridType final : public EncodingTypeOf<HashGridType> {
     n["log2_table_size"] = o.log2_table_size;
     n["base_resolution"] = o.base_resolution;
     n["finest_resolution"] = o.finest_resolution;
-    n["interpolation"] = Registry<int>::lower(o.interpolation);
+    n["interpolation"] = io::to_lower(o.interpolation);
     n["include_input"] = o.include_input;
     n["init_scale"] = io::yaml_number(o.init_scale);
   }
@@ -93,7 +93,7 @@ class HashGridType final : public EncodingTypeOf<HashGridType> {
     file.write_attribute(group, "encoding_log2_table_size", o.log2_table_size);
     file.write_attribute(group, "encoding_base_resolution", o.base_resolution);
     file.write_attribute(group, "encoding_finest_resolution", o.finest_resolution);
-    file.write_attribute(group, "encoding_interpolation", Registry<int>::lower(o.interpolation));
+    file.write_attribute(group, "encoding_interpolation", io::to_lower(o.interpolation));
     file.write_attribute(group, "encoding_init_scale", o.init_scale);
   }
   void load(const io::H5Reader& file, const std::string& group, EncodingOptions& o) const override {

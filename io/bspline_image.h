@@ -15,8 +15,7 @@
 // Why a spline: a gradient (or Laplacian) target taken as central differences at pixel
 // centres is the derivative of no function through the pixels. Its response to a frequency
 // ω is sin(ωh)/h instead of ω, zero at the Nyquist frequency, so a field that matches it
-// reproduces a smoothed picture and the PSNR against the pixels is capped by the data
-// (about 30 dB on camera.png). The spline's derivatives, sampled anywhere, are those of a
+// reproduces a smoothed picture and the PSNR against the pixels is capped by the data. The spline's derivatives, sampled anywhere, are those of a
 // function that is exactly the picture at its pixels: the picture up to a constant is fixed
 // by ∇s, and matching them is a question of the field only.
 //

@@ -13,6 +13,8 @@
 #include <system_error>
 #include <utility>
 
+#include "io/text.h"
+
 namespace nfield::io {
 namespace {
 
@@ -34,13 +36,6 @@ std::string describe(const YAML::Node& node) {
   if (node.IsMap()) return "a mapping";
   if (node.IsSequence()) return "a list of " + std::to_string(node.size());
   return "'" + node.Scalar() + "'";
-}
-
-std::string to_lower(std::string_view text) {
-  std::string out(text);
-  for (char& c : out)
-    if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
-  return out;
 }
 
 std::string join(const std::vector<std::string>& items) {

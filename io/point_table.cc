@@ -11,16 +11,10 @@
 
 #include "io/hdf5_file.h"
 #include "io/point_table_text.h"
+#include "io/text.h"
 
 namespace nfield::io {
 namespace {
-
-std::string lower(std::string_view text) {
-  std::string out(text);
-  std::transform(out.begin(), out.end(), out.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return out;
-}
 
 std::string join(const std::vector<std::string>& names) {
   std::string out;
@@ -56,7 +50,7 @@ std::string read_whole_file(const std::filesystem::path& path, const std::string
 }
 
 TableFormat format_of(const std::filesystem::path& path, const std::string& source) {
-  const std::string extension = lower(path.extension().string());
+  const std::string extension = to_lower(path.extension().string());
   if (extension == ".csv") return TableFormat::csv;
   if (extension == ".txt" || extension == ".dat") return TableFormat::whitespace;
   if (extension == ".h5" || extension == ".hdf5") return TableFormat::hdf5;
@@ -184,7 +178,7 @@ TableError::TableError(std::string file, int line, int column, std::string messa
 PointTable read_point_table(std::string_view source, const TableOptions& options) {
   // "FILE.h5:/dataset": split at the first ".h5:" or ".hdf5:".
   std::string path_text(source), dataset;
-  const std::string folded = lower(source);
+  const std::string folded = to_lower(source);
   for (const std::string_view extension : {".h5:", ".hdf5:"}) {
     const std::size_t at = folded.find(extension);
     if (at != std::string::npos && dataset.empty() && path_text.size() == source.size()) {

@@ -5,13 +5,13 @@
 // lists every valid name. Each family fills its registry in one plain function.
 #pragma once
 
-#include <algorithm>
-#include <cctype>
 #include <map>
 #include <stdexcept>
 #include <string>
 #include <string_view>
 #include <vector>
+
+#include "io/text.h"
 
 namespace nfield {
 
@@ -26,15 +26,15 @@ class Registry {
   explicit Registry(std::string family) : family_(std::move(family)) {}
 
   void add(std::string_view name, Entry entry) {
-    const std::string key = lower(name);
+    const std::string key = io::to_lower(name);
     if (!entries_.emplace(key, std::move(entry)).second)
       throw std::logic_error(family_ + " '" + key + "' registered twice");
   }
 
-  bool contains(std::string_view name) const { return entries_.count(lower(name)) > 0; }
+  bool contains(std::string_view name) const { return entries_.count(io::to_lower(name)) > 0; }
 
   const Entry& at(std::string_view name) const {
-    auto it = entries_.find(lower(name));
+    auto it = entries_.find(io::to_lower(name));
     if (it == entries_.end())
       throw UnknownNameError("unknown " + family_ + " '" + std::string(name) +
                              "' (valid: " + joined_names() + ")");
@@ -51,13 +51,6 @@ class Registry {
   std::string joined_names() const {
     std::string out;
     for (const auto& [name, entry] : entries_) out += (out.empty() ? "" : ", ") + name;
-    return out;
-  }
-
-  static std::string lower(std::string_view name) {
-    std::string out(name);
-    std::transform(out.begin(), out.end(), out.begin(),
-                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
     return out;
   }
 

@@ -1,8 +1,6 @@
 // SPDX-License-Identifier: MIT
 #include "io/vtk_polydata_read.h"
 
-#include <algorithm>
-#include <cctype>
 #include <functional>
 #include <stdexcept>
 
@@ -13,16 +11,14 @@
 #include <vtkTriangleFilter.h>
 #include <vtkXMLPolyDataReader.h>
 
+#include "io/text.h"
 #include "io/vtk_errors.h"
 
 namespace nfield::io {
 namespace fs = std::filesystem;
 
 std::string lower_extension(const fs::path& path) {
-  std::string e = path.extension().string();
-  std::transform(e.begin(), e.end(), e.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return e;
+  return to_lower(path.extension().string());
 }
 
 namespace {

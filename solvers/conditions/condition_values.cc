@@ -2,6 +2,7 @@
 #include "solvers/conditions/condition_values.h"
 
 #include "io/registry.h"
+#include "io/text.h"
 
 namespace nfield::solvers {
 
@@ -45,7 +46,7 @@ std::vector<Face> condition_faces(const io::ConfigNode& item, const Domain& doma
   item.require("on", !names.empty(), "expected a face name or a non-empty list of face names");
   std::vector<Face> faces;
   for (const std::string& name : names) {
-    if (Registry<int>::lower(name) == "boundary") {
+    if (io::to_lower(name) == "boundary") {
       const auto all = domain.faces();
       faces.insert(faces.end(), all.begin(), all.end());
       continue;

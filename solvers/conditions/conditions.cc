@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "solvers/conditions/conditions.h"
 
-#include "io/registry.h"
+#include "io/text.h"
 #include "solvers/conditions/condition_values.h"
 #include "solvers/conditions/hard_constraints.h"
 
@@ -35,7 +35,7 @@ std::vector<LossTerm> condition_terms(const io::ConfigNode& conditions, const Do
       continue;  // enforced by the ansatz, no loss term
     }
     const bool initial = item.has("on") && !item.has_list("on") &&
-                         Registry<int>::lower(item.get<std::string>("on")) == "initial";
+                         io::to_lower(item.get<std::string>("on")) == "initial";
     LossTerm term;
     term.weight = item.get_or("weight", 1.0);
     item.require("weight", term.weight >= 0, "expected a weight >= 0");

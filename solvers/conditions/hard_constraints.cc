@@ -9,7 +9,7 @@
 #include <stdexcept>
 #include <type_traits>
 
-#include "io/registry.h"
+#include "io/text.h"
 #include "solvers/conditions/condition_values.h"
 
 namespace nfield::solvers {
@@ -431,7 +431,7 @@ std::shared_ptr<const Ansatz> read_ansatz(const io::ConfigNode& conditions, cons
     item.require("weight", !item.has("weight"),
                  "a hard condition (enforce: hard) is no loss term and takes no weight");
     const bool initial = item.has("on") && !item.has_list("on") &&
-                         Registry<int>::lower(item.get<std::string>("on")) == "initial";
+                         io::to_lower(item.get<std::string>("on")) == "initial";
     const auto values = channel_expressions(item, "value", domain, output_dim, constants);
     if (initial) {
       if (!domain.has_time()) throw item.error("on", "'initial' needs a domain with a time interval");

@@ -39,10 +39,8 @@
 //
 // This rule is written once, templated on the scalar (ansatz_product_rule below, per point
 // and channel). `apply` runs it in double, on packs of 16 points (Eigen fixed-size arrays,
-// which the compiler vectorizes) and point by point for the rest: for the wave 2D layout
-// (S = 5 streams) on 3000 points in blocks of 128 that is 9 µs, against 80 µs point by point
-// and 5 µs for the whole-stream Eigen expressions it replaced; a training step there takes
-// 15 ms.
+// which the compiler vectorizes) and point by point for the rest: packs are what keep its cost
+// small beside a training step (timings: docs/experiments.md).
 //
 // The adjoint is not written by hand. Every term of u − A above is one D stream times one N
 // stream: the rule is bilinear in (D, N),

@@ -120,11 +120,11 @@ class AutoInt1d final : public Problem {
     LossTerm fit;
     fit.name = "integrand";
     fit.batch_key = "interior";
-    fit.spec = autodiff::StreamSpec::gradient(1);  // stream 1: ∂Φ/∂x
+    fit.spec = autodiff::StreamSpec::gradient(1);
     fit.sample = [this](Random& rng, Eigen::Index n) -> TermPoints { return draw(rng, n); };
-    fit.residual = [this](const TermPoints& points) {
+    fit.residual = [this, dphi_dx = autodiff::StreamLayout(fit.spec).tangent(0)](const TermPoints& points) {
       return std::make_unique<LinearResidual>(
-          std::vector<LinearResidual::Term>{{0, 1, 0, Eigen::VectorXd::Ones(1)}}, integrand(points.x));
+          std::vector<LinearResidual::Term>{{0, dphi_dx, 0, Eigen::VectorXd::Ones(1)}}, integrand(points.x));
     };
     return {fit};
   }
@@ -259,13 +259,13 @@ class AutoInt1d final : public Problem {
   static integrators::PointFunction phi(const OutputContext& context) {
     const autodiff::StreamLayout values(autodiff::StreamSpec::values(1));
     return [&context, values](const Eigen::MatrixXd& x) -> Eigen::VectorXd {
-      return context.streams(values, x).stream(0).col(0);
+      return context.streams(values, x).stream(values.value()).col(0);
     };
   }
   static integrators::PointFunction derivative(const OutputContext& context) {
     const autodiff::StreamLayout gradient(autodiff::StreamSpec::gradient(1));
     return [&context, gradient](const Eigen::MatrixXd& x) -> Eigen::VectorXd {
-      return context.streams(gradient, x).stream(1).col(0);
+      return context.streams(gradient, x).stream(gradient.tangent(0)).col(0);
     };
   }
   Eigen::VectorXd autoint_integrals(const OutputContext& context) const {

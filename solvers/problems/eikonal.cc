@@ -51,21 +51,20 @@
 //             A network with cusp features makes the kink on the plane at no cost, including
 //             a V-shaped one that emits waves into the source's layer earlier than the far
 //             layer could carry them along the interface (|∇_t u| < 1/v_far); the Laplacian of
-//             the viscous term does not see a kink that is exactly on the plane. On the
-//             two-layer accuracy config without this term, that was the error left on seed 1
-//             (times early by up to 1.4e-2; configs/accuracy_eikonal_layered.yaml).
+//             the viscous term does not see a kink that is exactly on the plane; this term
+//             does (figures: docs/experiments.md).
 //
 // Vanishing viscosity (`viscosity: ε`): the "pde" residual becomes r = |∇u| − 1/v − ε Δu.
 // |∇u| = 1/v at the collocation points also holds for fields with kinks of the wrong kind:
 // ridges across which u is convex, lines that "emit" waves earlier than the first arrival,
-// which a network rounds off between the points at little cost. On the two-layer example Adam
-// and LM found such a field for some seeds (rel_l2 3e-2, loss 1e-6 on fresh points). The first
+// which a network rounds off between the points at little cost, and which Adam and LM did
+// find on the two-layer example (docs/experiments.md). The first
 // arrival is the limit ε → 0 of the viscous equation (the viscosity solution of Crandall and
 // Lions): rounding a concave kink (two fronts meeting) gives Δu < 0 together with |∇u| < 1/v,
 // which the term balances, while rounding a convex one gives Δu > 0 and a residual that grows.
 // ε biases the result by about ε times the curvature, so it is meant to fall over the training
-// stages to a small value: a list gives one ε per stage (on the two-layer example, falling to
-// 0 let LM drift back to such fields, 3e-3 → 8e-3; held at 1e-3 it did not). Factored, the
+// stages to a small value: a list gives one ε per stage (falling to 0 let LM drift back to
+// such fields; held at a small ε it did not). Factored, the
 // term is ε (Δu − (1 + τ) ΔT₀) = ε (2 ∇T₀·∇τ + T₀ Δτ): the curvature ΔT₀ = (d − 1)/(v₀ |x − x₀|)
 // of the analytic factor is left out, as it would dominate the residual near the source,
 // where there is no branch to select.
@@ -73,17 +72,15 @@
 // `viscosity_form: concave` keeps only the negative part: r = |∇u| − 1/v − ε min(0, Δu), with
 // the whole Δu = (1 + τ) ΔT₀ + 2 ∇T₀·∇τ + T₀ Δτ when factored. The term ε Δu biases smooth
 // regions by ε times the curvature and, where a rounded kink is crossed, by ε times the jump
-// of the normal derivative; in the two-layer example the travel times above the interface
-// came out early by ≈ 5e-4 = ε·0.5 everywhere. Fronts spreading from a point source have
+// of the normal derivative, everywhere beyond it. Fronts spreading from a point source have
 // Δu > 0 (the cone's ΔT₀ among them, which therefore needs no special case) as long as no
 // focusing occurs, and fronts that meet have Δu < 0; the concave form keeps the part that
 // makes meeting fronts cheap to round and drops the bias of the spreading ones. It no longer
 // makes ridges dear (they go unpenalized, as without viscosity). The operator stays
 // degenerate elliptic (nonincreasing in D²u), so ε → 0 still gives the viscosity solution.
-// On the two-layer accuracy config without cusp features, seeds 0 / 1 / 2 ended at 4.3e-3 /
-// 8.0e-3 / 2.6e-3 with it, 2.1e-3 / 3.0e-3 / 9.1e-3 without; with cusp features entering at
-// the first LM stage and the "interface" term, 3.7e-4 / 5.2e-4 / 3.2e-4 with it and 2.9e-3 /
-// 2.9e-4 / 4.3e-4 without, so that config uses it (docs/config.md).
+// With cusp features and the "interface" term it ended lower than the full Laplacian on
+// average over three seeds, so configs/accuracy_eikonal_layered.yaml uses it (seed tables:
+// docs/experiments.md).
 //
 // The solution is a cone at x₀ (u ≈ |x − x₀|/v₀), whose kink a smooth network rounds off.
 // With `factored: true` the travel time is factored as u = T₀ (1 + τ) with the analytic
@@ -94,8 +91,8 @@
 // τ̄ = ḡ·∇T₀, ∇τ̄ = T₀ ḡ with ḡ = r̄ ∇u/|∇u|. The source condition becomes τ(x₀) = 0 (the
 // equation at x₀ reads (1 + τ(x₀))/v₀ = 1/v(x₀)). The offset 1 helps: |∇u| = 1/v is also
 // solved by −u, and a network that starts near u ≈ 0 (τ ≈ −1) picks either sign region by
-// region; starting near τ = 0 (u ≈ T₀) it starts on the right branch. On the two-layer
-// example the plain form (no factoring) did not converge at all in the same budget.
+// region; starting near τ = 0 (u ≈ T₀) it starts on the right branch, where the plain form
+// did not converge at all in the same budget (docs/experiments.md).
 //
 // Metrics: without factoring, the grid's rel_l2 and max_abs_err (solution.vti: u, exact_u,
 // error_u) are those of the travel time. With factoring the network output is τ

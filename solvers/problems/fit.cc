@@ -44,7 +44,6 @@
 // blue); video: frames/reconstruction_NNN.png and frames/error_NNN.png (one viridis range,
 // 0 to max_abs_err, for all frames). Every file is written atomically.
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -57,6 +56,7 @@
 #include "io/image_metrics.h"
 #include "io/line_plot.h"
 #include "io/png_image.h"
+#include "io/text.h"
 #include "solvers/problems/problems.h"
 
 namespace nfield::solvers {
@@ -274,10 +274,7 @@ class Fit final : public Problem {
       if (!fs::is_directory(path, ec))
         throw equation.error("path", path.string() + ": expected a folder of PNG frames");
       for (const auto& entry : fs::directory_iterator(path, ec)) {
-        std::string extension = entry.path().extension().string();
-        std::transform(extension.begin(), extension.end(), extension.begin(),
-                       [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
-        if (entry.is_regular_file() && extension == ".png") files.push_back(entry.path());
+        if (entry.is_regular_file() && io::to_lower(entry.path().extension().string()) == ".png") files.push_back(entry.path());
       }
       if (ec) throw equation.error("path", path.string() + ": cannot list the folder: " + ec.message());
       if (files.empty()) throw equation.error("path", path.string() + ": no PNG frames (*.png) in the folder");

@@ -82,9 +82,9 @@
 //
 //   Both have the same zeros, but the multiplied form scales the residual by |P|, up to
 //   |1 + i a/k|² = 26 in the layer's corners (a = 100, k = 20), so its squared loss weights the
-//   layer up to ~700 times the physical region and training spends itself there: on
-//   configs/helmholtz_pml.yaml (double, 1500 Adam + 500 L-BFGS) rel_l2 0.88 multiplied
-//   against 0.38 divided. Divided, the coefficients are bounded by their values outside. A Dirichlet condition u = 0 on the outer faces (conditions:) closes the
+//   layer up to ~700 times the physical region and training spends itself there
+//   (configs/helmholtz_pml.yaml: docs/experiments.md). Divided, the coefficients are
+//   bounded by their values outside. A Dirichlet condition u = 0 on the outer faces (conditions:) closes the
 //   layer; what it reflects comes back damped by e^{−2aw/3}.
 //   error_mask() leaves out the layer and the disk around the source.
 #include <cmath>
@@ -249,7 +249,9 @@ class Helmholtz final : public Problem {
     } else {
       pde.spec = autodiff::StreamSpec::laplacian(d);
     }
-    pde.residual = [this](const Eigen::MatrixXd& x) { return residual(x); };
+    pde.residual = [this, layout = autodiff::StreamLayout(pde.spec)](const Eigen::MatrixXd& x) {
+      return residual(layout, x);
+    };
     std::vector<LossTerm> terms{pde};
     if (point_source_ && source_weight_ > 0) {
       LossTerm near = pde;
@@ -300,23 +302,22 @@ class Helmholtz final : public Problem {
     return f;
   }
 
-  std::unique_ptr<Residual> residual(const Eigen::MatrixXd& x) const {
+  std::unique_ptr<Residual> residual(const autodiff::StreamLayout& layout, const Eigen::MatrixXd& x) const {
     const int d = domain_.space_dim();
     const Eigen::Index n = x.rows();
     const Eigen::MatrixXd f = source_values(x);
     const double k2 = k_ * k_;
     std::vector<LinearResidual::Term> terms;
     if (pml_width_ <= 0) {
-      // Δu + k²u − f, channel by channel: the Laplacian is stream 1 + d.
-      const int lap = 1 + d;
+      // Δu + k²u − f, channel by channel.
       for (int c = 0; c < output_dim(); ++c) {
-        terms.push_back({c, lap, c, Eigen::VectorXd::Ones(1)});
-        if (k2 != 0) terms.push_back({c, 0, c, Eigen::VectorXd::Constant(1, k2)});
+        terms.push_back({c, layout.op(0), c, Eigen::VectorXd::Ones(1)});
+        if (k2 != 0) terms.push_back({c, layout.value(), c, Eigen::VectorXd::Constant(1, k2)});
       }
       return std::make_unique<LinearResidual>(std::move(terms), f);
     }
-    // Stretched operator: per-point complex coefficients of u_jj (stream 1 + d + j),
-    // u_j (stream 1 + j) and u (stream 0), and the right-hand side P f.
+    // Stretched operator: per-point complex coefficients of u_jj (operator stream j), u_j
+    // (tangent j) and u, and the right-hand side P f.
     std::vector<Eigen::VectorXcd> second(d, Eigen::VectorXcd(n)), first(d, Eigen::VectorXcd(n));
     Eigen::VectorXcd zeroth(n);
     Eigen::MatrixXd rhs(n, 2);
@@ -354,10 +355,10 @@ class Helmholtz final : public Problem {
       }
     };
     for (int a = 0; a < d; ++a) {
-      add(1 + d + a, second[a]);
-      if (!first[a].isZero(0)) add(1 + a, first[a]);
+      add(layout.op(a), second[a]);
+      if (!first[a].isZero(0)) add(layout.tangent(a), first[a]);
     }
-    if (k2 != 0) add(0, zeroth);
+    if (k2 != 0) add(layout.value(), zeroth);
     return std::make_unique<LinearResidual>(std::move(terms), rhs);
   }
 

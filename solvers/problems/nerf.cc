@@ -137,8 +137,8 @@ class RayColourResidual final : public Residual {
     integrators::render_backward<double>(b.samples, b.sigma, b.rgb, b.background, bar, sigma_bar,
                                          rgb_bar);
     const Eigen::Index offset = b.samples_begin;
-    auto value = out.stream(0);
-    auto value_bar = adjoint.stream(0);
+    auto value = out.stream(StreamLayout::value());
+    auto value_bar = adjoint.stream(StreamLayout::value());
     for (Eigen::Index i = 0; i < b.sigma.size(); ++i) {
       value_bar(offset + i, 0) += sigma_bar(i) * density_.derivative(value(offset + i, 0));
       for (int c = 0; c < 3; ++c) {
@@ -164,7 +164,7 @@ class RayColourResidual final : public Residual {
     b.samples = integrators::ray_range(all, static_cast<Eigen::Index>(b.k0), static_cast<Eigen::Index>(b.k1));
     b.samples_begin = all.offsets[b.k0] - first;
     const Eigen::Index n = b.samples.size();
-    const auto value = out.stream(0).middleRows(b.samples_begin, n);
+    const auto value = out.stream(StreamLayout::value()).middleRows(b.samples_begin, n);
     Shading shading = shade(value, density_);
     b.sigma = std::move(shading.sigma);
     b.rgb = std::move(shading.rgb);

@@ -38,6 +38,7 @@
 #include <optional>
 
 #include "io/compiled_expression.h"
+#include "io/text.h"
 #include "solvers/conditions/condition_values.h"
 #include "solvers/conditions/conditions.h"
 #include "solvers/problems/burgers_reference.h"
@@ -319,7 +320,7 @@ class Pde final : public Problem {
   void read_where(const io::ConfigNode& item, ResidualSpec& r) const {
     r.batch_key = "interior";
     if (!item.has("on")) return;
-    if (!item.has_list("on") && Registry<int>::lower(item.get<std::string>("on")) == "initial") {
+    if (!item.has_list("on") && io::to_lower(item.get<std::string>("on")) == "initial") {
       if (!domain_.has_time()) throw item.error("on", "'initial' needs a domain with a time interval");
       r.where = ResidualSpec::Where::kInitial;
       r.batch_key = "initial";

@@ -34,7 +34,7 @@ class Poisson final : public Problem {
     pde.spec = autodiff::StreamSpec::laplacian(d);
     pde.sample = [this](Random& rng, Eigen::Index n) { return domain_.sample_interior(rng, n); };
     const auto source = source_;
-    const int laplacian_stream = 1 + d;
+    const int laplacian_stream = autodiff::StreamLayout(pde.spec).op(0);
     pde.residual = [source, laplacian_stream](const Eigen::MatrixXd& x) {
       Eigen::MatrixXd f = source->evaluate(x);
       return std::make_unique<LinearResidual>(

@@ -30,7 +30,7 @@
 //   residual             the strong form Δu − g at random points, with the `flux` term ∂u/∂n
 //                        on the border. Its Hessian weighs an error of frequency ω by ω⁴:
 //                        the fine detail converges first and the smooth shading is nearly
-//                        free, and noisy in a random batch (13.9 dB on camera.png at 256²).
+//                        free, and noisy in a random batch (docs/experiments.md).
 //   energy               the Ritz energy of the Neumann problem Δu = g, ∂u/∂n = 0, written
 //                        as the least squares ∇u − q with q a zero-flux field of divergence
 //                        g built from values of g alone (io::BSplineLaplacianFlux): ∫ g·u =
@@ -150,7 +150,7 @@ class PoissonImage final : public Problem {
       }
       return x;
     };
-    term.residual = [this](const Eigen::MatrixXd& x) {
+    term.residual = [this, layout = autodiff::StreamLayout(term.spec)](const Eigen::MatrixXd& x) {
       const Eigen::Index n = x.rows();
       const bool gradient = supervise_ == "gradient";
       if (energy_) {
@@ -161,7 +161,7 @@ class PoissonImage final : public Problem {
                                                     std::clamp((1.0 - x(i, 1)) / hy_, 0.0, height_ - 1.0));
           target.row(i) << q(0), -q(1);
         }
-        return residual_for(target);
+        return residual_for(layout, target);
       }
       if (spline_) {
         Eigen::MatrixXd target(n, gradient ? 2 : 1);
@@ -175,7 +175,7 @@ class PoissonImage final : public Problem {
           else
             target(i, 0) = d.dd_column / (hx_ * hx_) + d.dd_row / (hy_ * hy_);
         }
-        return residual_for(target);
+        return residual_for(layout, target);
       }
       if (gradient) {
         Eigen::MatrixXd target(n, 2);
@@ -184,7 +184,7 @@ class PoissonImage final : public Problem {
           target(i, 0) = (at(r, c + 1) - at(r, c - 1)) / (2 * hx_);
           target(i, 1) = (at(r - 1, c) - at(r + 1, c)) / (2 * hy_);  // y points up
         }
-        return residual_for(target);
+        return residual_for(layout, target);
       }
       Eigen::MatrixXd target(n, 1);
       for (Eigen::Index i = 0; i < n; ++i) {
@@ -192,7 +192,7 @@ class PoissonImage final : public Problem {
         target(i, 0) = (at(r, c + 1) - 2 * at(r, c) + at(r, c - 1)) / (hx_ * hx_) +
                        (at(r + 1, c) - 2 * at(r, c) + at(r - 1, c)) / (hy_ * hy_);
       }
-      return residual_for(target);
+      return residual_for(layout, target);
     };
     if (stream_) {
       LossTerm border;
@@ -202,7 +202,9 @@ class PoissonImage final : public Problem {
       border.spec = autodiff::StreamSpec::values(2);
       border.sample = sample_border;
       border.residual = [](const Eigen::MatrixXd& x) {
-        return std::make_unique<LinearResidual>(std::vector<LinearResidual::Term>{{0, 0, 1, Eigen::VectorXd::Ones(1)}},
+        const int psi = 1;
+        return std::make_unique<LinearResidual>(
+            std::vector<LinearResidual::Term>{{0, autodiff::StreamLayout::value(), psi, Eigen::VectorXd::Ones(1)}},
                                                 Eigen::MatrixXd::Zero(x.rows(), 1));
       };
       return {term, border};
@@ -216,7 +218,7 @@ class PoissonImage final : public Problem {
     flux.weight = flux_weight_;
     flux.spec = autodiff::StreamSpec::gradient(2);
     flux.sample = sample_border;
-    flux.residual = [this](const Eigen::MatrixXd& x) {
+    flux.residual = [this, layout = autodiff::StreamLayout(flux.spec)](const Eigen::MatrixXd& x) {
       const Eigen::Index n = x.rows();
       Eigen::VectorXd nx = Eigen::VectorXd::Zero(n), ny = Eigen::VectorXd::Zero(n);
       Eigen::MatrixXd target(n, 1);
@@ -230,7 +232,7 @@ class PoissonImage final : public Problem {
         target(i, 0) = nx(i) * d.d_column / hx_ - ny(i) * d.d_row / hy_;
       }
       return std::make_unique<LinearResidual>(
-          std::vector<LinearResidual::Term>{{0, 1, 0, nx}, {0, 2, 0, ny}}, target);
+          std::vector<LinearResidual::Term>{{0, layout.tangent(0), 0, nx}, {0, layout.tangent(1), 0, ny}}, target);
     };
     return {term, flux};
   }
@@ -263,22 +265,24 @@ class PoissonImage final : public Problem {
   }
 
  private:
-  // ∂u/∂x, ∂u/∂y (streams 1, 2 of the gradient spec; target the gradient or the energy's q),
-  // with ∂ψ/∂y, −∂ψ/∂x added for the stream function, or Δu (stream 3 of the Laplacian's),
-  // minus the target's columns.
-  std::unique_ptr<Residual> residual_for(const Eigen::MatrixXd& target) const {
-    if (stream_)
+  // ∂u/∂x, ∂u/∂y (target the gradient or the energy's q), with ∂ψ/∂y, −∂ψ/∂x added for the
+  // stream function, or Δu, minus the target's columns.
+  std::unique_ptr<Residual> residual_for(const autodiff::StreamLayout& layout, const Eigen::MatrixXd& target) const {
+    if (stream_ || supervise_ == "gradient" || energy_) {
+      const int d_dx = layout.tangent(0), d_dy = layout.tangent(1);
+      const int u = 0, psi = 1;
+      if (stream_)
+        return std::make_unique<LinearResidual>(
+            std::vector<LinearResidual::Term>{{0, d_dx, u, Eigen::VectorXd::Ones(1)},
+                                              {0, d_dy, psi, Eigen::VectorXd::Ones(1)},
+                                              {1, d_dy, u, Eigen::VectorXd::Ones(1)},
+                                              {1, d_dx, psi, -Eigen::VectorXd::Ones(1)}},
+            target);
       return std::make_unique<LinearResidual>(
-          std::vector<LinearResidual::Term>{{0, 1, 0, Eigen::VectorXd::Ones(1)},
-                                            {0, 2, 1, Eigen::VectorXd::Ones(1)},
-                                            {1, 2, 0, Eigen::VectorXd::Ones(1)},
-                                            {1, 1, 1, -Eigen::VectorXd::Ones(1)}},
+          std::vector<LinearResidual::Term>{{0, d_dx, u, Eigen::VectorXd::Ones(1)}, {1, d_dy, u, Eigen::VectorXd::Ones(1)}},
           target);
-    if (supervise_ == "gradient" || energy_)
-      return std::make_unique<LinearResidual>(
-          std::vector<LinearResidual::Term>{{0, 1, 0, Eigen::VectorXd::Ones(1)}, {1, 2, 0, Eigen::VectorXd::Ones(1)}},
-          target);
-    return std::make_unique<LinearResidual>(std::vector<LinearResidual::Term>{{0, 3, 0, Eigen::VectorXd::Ones(1)}},
+    }
+    return std::make_unique<LinearResidual>(std::vector<LinearResidual::Term>{{0, layout.op(0), 0, Eigen::VectorXd::Ones(1)}},
                                             target);
   }
 

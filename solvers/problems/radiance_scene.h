@@ -19,6 +19,7 @@
 
 #include "integrators/camera.h"
 #include "integrators/multiview_dataset.h"
+#include "integrators/radiance_activations.h"
 #include "integrators/ray_batch.h"
 #include "integrators/ray_sampling.h"
 #include "integrators/scene_box.h"
@@ -28,21 +29,7 @@ namespace nfield::solvers {
 
 enum class Background { kWhite, kBlack, kRandom };
 
-// σ = density(s) and dσ/ds.
-struct DensityActivation {
-  bool truncated_exp = false;  // else softplus
-  double value(double s) const {
-    if (truncated_exp) return std::exp(std::min(s, 15.0));
-    return s > 20 ? s : std::log1p(std::exp(s));
-  }
-  double derivative(double s) const {
-    // Instant NGP's truncated exponential: exp with its gradient clamped at s = ±15.
-    if (truncated_exp) return std::exp(std::clamp(s, -15.0, 15.0));
-    return 1.0 / (1.0 + std::exp(-s));
-  }
-};
-
-inline double sigmoid(double z) { return 1.0 / (1.0 + std::exp(-z)); }
+using integrators::DensityActivation;
 
 // σ and c from raw outputs [s, r, g, b] (rows of `raw`).
 struct Shading {
@@ -52,7 +39,7 @@ struct Shading {
 template <typename Raw>
 Shading shade(const Raw& raw, const DensityActivation& density) {
   return {raw.col(0).unaryExpr([&density](double s) { return density.value(s); }),
-          raw.middleCols(1, 3).unaryExpr([](double z) { return sigmoid(z); })};
+          raw.middleCols(1, 3).unaryExpr([](double z) { return integrators::colour_activation(z); })};
 }
 
 // A rendered batch of rays (one per pixel).

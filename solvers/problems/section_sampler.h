@@ -19,8 +19,8 @@
 // composited from the section means s̄ᵢ = (Φ(tᵢ₊₁) − Φ(tᵢ))/Δᵢ of the integral field Φ, as
 // at render time, against the pixel: L_S = mean over rays of ‖C − C_pixel‖², one Adam step
 // per update, with Φ held fixed, on the first `rays` rays of the batch (a random subset: S
-// is small, and reading the rate of Φ at every section end of all 1024 rays of a batch made
-// a step at K = 32 35 % slower). (The integral field's own step then trains at stratified
+// is small, and reading the rate of Φ at every section end of every ray of a batch slowed a
+// step noticeably; docs/experiments.md). (The integral field's own step then trains at stratified
 // samples inside S's sections, which it sees as fixed.) The boundary adjoints are exact:
 // with φ = ∂Φ/∂t (a tangent stream of Φ along d at each boundary),
 //

@@ -36,7 +36,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "io/registry.h"
+#include "io/text.h"
 #include "solvers/conditions/condition_values.h"
 #include "solvers/conditions/conditions.h"
 #include "solvers/problems/problems.h"
@@ -173,8 +173,8 @@ class Wave final : public Problem {
     for (std::size_t i = 0; conditions.is_sequence() && i < conditions.size(); ++i) {
       const io::ConfigNode item = conditions.at(i);
       const io::Expression value = channel_expressions(item, "value", domain_, 1).front();
-      const std::string type = Registry<int>::lower(item.get<std::string>("type"));
-      if (!item.has_list("on") && Registry<int>::lower(item.get<std::string>("on")) == "initial") {
+      const std::string type = io::to_lower(item.get<std::string>("type"));
+      if (!item.has_list("on") && io::to_lower(item.get<std::string>("on")) == "initial") {
         (type == "value" ? data.initial_value : data.initial_velocity) = value;
         (type == "value" ? has_value : has_velocity) = true;
         continue;

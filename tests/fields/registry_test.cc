@@ -16,6 +16,7 @@
 #include "fields/encodings.h"
 #include "fields/field.h"
 #include "io/registry.h"
+#include "io/text.h"
 
 namespace nfield::fields {
 namespace {
@@ -39,7 +40,7 @@ void expect_lists(const std::string& message, const std::vector<std::string>& na
 TEST(ActivationRegistry, NamesAreSortedLowerCaseAndComplete) {
   const std::vector<std::string> names = activation_names();
   EXPECT_TRUE(std::is_sorted(names.begin(), names.end()));
-  for (const std::string& name : names) EXPECT_EQ(name, Registry<int>::lower(name));
+  for (const std::string& name : names) EXPECT_EQ(name, io::to_lower(name));
   for (const char* documented : {"identity", "relu", "sine", "softplus", "tanh"})
     EXPECT_NE(std::find(names.begin(), names.end(), documented), names.end()) << documented;
 }

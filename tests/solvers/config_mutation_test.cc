@@ -41,6 +41,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "io/config.h"
+#include "io/text.h"
 #include "solvers/run.h"
 #include "tests/testing/scratch.h"
 
@@ -101,9 +102,8 @@ bool is_number(const std::string& text) {
   }
 }
 
-bool is_bool(std::string text) {
-  std::transform(text.begin(), text.end(), text.begin(),
-                 [](unsigned char c) { return std::tolower(c); });
+bool is_bool(std::string_view raw) {
+  const std::string text = io::to_lower(raw);
   return text == "true" || text == "false" || text == "yes" || text == "no" || text == "on" ||
          text == "off";
 }

@@ -41,7 +41,7 @@
 #include "fields/activations.h"
 #include "fields/field.h"
 #include "fields/hash_grid.h"
-#include "io/registry.h"
+#include "io/text.h"
 
 namespace nfield::testutil {
 
@@ -190,7 +190,7 @@ T closed_form_activation(const std::string& name, double omega, const T& z, bool
 
 inline bool knows_activation(const std::string& name) {
   bool known = false;
-  closed_form_activation<double>(Registry<int>::lower(name), 1.0, 0.0, &known);
+  closed_form_activation<double>(io::to_lower(name), 1.0, 0.0, &known);
   return known;
 }
 
@@ -201,13 +201,13 @@ class ReferenceField {
       : options_(std::move(options)),
         parameters_(std::move(parameters)),
         encoding_(std::move(encoding)) {
-    siren_ = Registry<int>::lower(options_.type) == "siren";
-    cusp_ = Registry<int>::lower(options_.encoding.type) == "cusp";
-    hash_ = Registry<int>::lower(options_.encoding.type) == "hash_grid";
-    integrated_ = Registry<int>::lower(options_.encoding.type) == "integrated_positional";
+    siren_ = io::to_lower(options_.type) == "siren";
+    cusp_ = io::to_lower(options_.encoding.type) == "cusp";
+    hash_ = io::to_lower(options_.encoding.type) == "hash_grid";
+    integrated_ = io::to_lower(options_.encoding.type) == "integrated_positional";
     include_input_ = hash_ || integrated_ ? options_.encoding.include_input
                            : encoding_.rows() == 0 || cusp_ ||
-                                 (Registry<int>::lower(options_.encoding.type) == "positional" &&
+                                 (io::to_lower(options_.encoding.type) == "positional" &&
                                   options_.encoding.include_input);
     Eigen::Index width = (include_input_ ? options_.input_dim : 0) +
                          (cusp_ ? 1 : 2) * encoding_.rows();
@@ -253,7 +253,7 @@ class ReferenceField {
   // The activation of hidden layer l as the field builds it.
   fields::ActivationSpec activation(size_t l) const {
     if (siren_) return {"sine", l == 0 ? options_.first_omega : options_.hidden_omega};
-    return {Registry<int>::lower(options_.activation), options_.hidden_omega};
+    return {io::to_lower(options_.activation), options_.hidden_omega};
   }
 
   // f(x): output_dim values.
@@ -349,7 +349,7 @@ class ReferenceField {
     static constexpr std::uint32_t kPrimes[4] = {1u, 2654435761u, 805459861u, 3674653429u};
     const fields::EncodingOptions& e = options_.encoding;
     const int d = options_.input_dim, features = e.features_per_level;
-    const std::string kind = Registry<int>::lower(e.interpolation);
+    const std::string kind = io::to_lower(e.interpolation);
     const bool smooth = kind == "smoothstep", cubic = kind == "cubic";
     const int taps = cubic ? 4 : 2;
     std::vector<T> out;

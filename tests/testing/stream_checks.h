@@ -27,6 +27,7 @@
 #include "fields/encoding_type.h"
 #include "fields/encodings.h"
 #include "fields/field.h"
+#include "io/text.h"
 #include "tests/testing/reference_field.h"
 
 namespace nfield::testutil {
@@ -337,9 +338,9 @@ inline fields::FieldOptions small_options(const NetworkCase& c, int input_dim, i
 // Whether the network has kinks (ReLU, cusp features, hash-grid cell faces) that finite
 // differences must not straddle.
 inline bool has_kinks(const fields::FieldOptions& o) {
-  return (Registry<int>::lower(o.type) != "siren" && Registry<int>::lower(o.activation) == "relu") ||
-         Registry<int>::lower(o.encoding.type) == "cusp" ||
-         Registry<int>::lower(o.encoding.type) == "hash_grid";
+  return (io::to_lower(o.type) != "siren" && io::to_lower(o.activation) == "relu") ||
+         io::to_lower(o.encoding.type) == "cusp" ||
+         io::to_lower(o.encoding.type) == "hash_grid";
 }
 
 // Signs of ReferenceField::preactivations at every point.
