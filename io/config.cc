@@ -38,18 +38,12 @@ std::string describe(const YAML::Node& node) {
   return "'" + node.Scalar() + "'";
 }
 
-std::string join(const std::vector<std::string>& items) {
-  std::string out;
-  for (const std::string& item : items) out += (out.empty() ? "" : ", ") + item;
-  return out.empty() ? "none" : out;
-}
-
 // The entry of `choices` that `value` names, case-insensitively; "" with `message` set if none.
 std::string match_choice(const std::string& value, const std::vector<std::string>& choices,
                          std::string& message) {
   for (const std::string& choice : choices)
     if (to_lower(choice) == to_lower(value)) return choice;
-  message = "expected one of " + join(choices) + "; got '" + value + "'";
+  message = "expected one of " + (choices.empty() ? std::string("none") : join(choices)) + "; got '" + value + "'";
   return "";
 }
 
@@ -548,7 +542,7 @@ void ConfigNode::check_keys(const YAML::Node& node, const std::string& path,
     const std::string& key = entry.first.Scalar();
     if (std::find(valid.begin(), valid.end(), key) == valid.end())
       throw ConfigError(file_, own_mark(entry.first), join_key(path, key),
-                        "unknown key '" + key + "' (valid keys: " + join(valid) + ")");
+                        "unknown key '" + key + "' (valid keys: " + (valid.empty() ? std::string("none") : join(valid)) + ")");
   }
 }
 

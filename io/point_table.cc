@@ -16,12 +16,6 @@
 namespace nfield::io {
 namespace {
 
-std::string join(const std::vector<std::string>& names) {
-  std::string out;
-  for (const std::string& name : names) out += (out.empty() ? "" : ", ") + name;
-  return out;
-}
-
 // The shortest text that reads back as `value`.
 std::string number_text(double value) {
   std::array<char, 32> buffer;

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: MIT
 #include "io/point_table_text.h"
+#include "io/text.h"
 
 #include <algorithm>
 #include <charconv>
@@ -17,12 +18,6 @@ std::string_view trim(std::string_view s) {
   while (!s.empty() && blank(s.front())) s.remove_prefix(1);
   while (!s.empty() && blank(s.back())) s.remove_suffix(1);
   return s;
-}
-
-std::string join(const std::vector<std::string>& names) {
-  std::string out;
-  for (const std::string& name : names) out += (out.empty() ? "" : ", ") + name;
-  return out;
 }
 
 // The lines of a text with their 1-based numbers; a '\r' before '\n' is dropped.

@@ -1,9 +1,11 @@
 // SPDX-License-Identifier: MIT
-// Case folding of names (registry entries, config choices, file extensions, column names).
+// Names in messages and lookups: case folding (registry entries, config choices, file
+// extensions, column names) and lists of names.
 #pragma once
 
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace nfield::io {
 
@@ -13,6 +15,16 @@ inline std::string to_lower(std::string_view text) {
   std::string out(text);
   for (char& c : out)
     if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
+  return out;
+}
+
+// "a, b, c": the names an error message lists.
+inline std::string join(const std::vector<std::string>& names, std::string_view separator = ", ") {
+  std::string out;
+  for (const std::string& name : names) {
+    if (!out.empty()) out += separator;
+    out += name;
+  }
   return out;
 }
 

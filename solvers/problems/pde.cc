@@ -53,12 +53,6 @@ const std::vector<std::string> kReservedNames = {
     "x", "y", "z", "t", "pi", "e", "lap", "bilap", "sin", "cos", "tan", "exp", "log", "sqrt",
     "abs", "tanh", "sinh", "cosh", "atan", "min", "max", "pow"};
 
-std::string joined(const std::vector<std::string>& names) {
-  std::string out;
-  for (const std::string& n : names) out += (out.empty() ? "" : ", ") + n;
-  return out;
-}
-
 bool is_name(const std::string& name, bool underscore) {
   if (name.empty() || !std::isalpha(static_cast<unsigned char>(name[0]))) return false;
   return std::all_of(name.begin(), name.end(), [&](char c) {
@@ -161,7 +155,7 @@ class Pde final : public Problem {
       root.require("outputs", is_name(name, false),
                    "output name '" + name + "' must be letters and digits, starting with a letter");
       root.require("outputs", !contains(kReservedNames, name),
-                   "output name '" + name + "' is taken (reserved: " + joined(kReservedNames) + ")");
+                   "output name '" + name + "' is taken (reserved: " + io::join(kReservedNames) + ")");
       root.require("outputs", std::count(outputs_.begin(), outputs_.end(), name) == 1,
                    "output name '" + name + "' is listed twice");
     }
@@ -175,7 +169,7 @@ class Pde final : public Problem {
     for (const std::string& name : node.keys()) {
       const std::string problem =
           !is_name(name, true)                         ? "must be letters, digits and '_', starting with a letter"
-          : contains(kReservedNames, name)             ? "is taken (reserved: " + joined(kReservedNames) + ")"
+          : contains(kReservedNames, name)             ? "is taken (reserved: " + io::join(kReservedNames) + ")"
           : contains(outputs_, name.substr(0, name.find('_'))) ? "reads as an output or its derivative"
                                                                 : "";
       if (!problem.empty()) throw node.error(name, "constant name '" + name + "' " + problem);
@@ -221,7 +215,7 @@ class Pde final : public Problem {
   std::string constant_names() const {
     std::vector<std::string> names;
     for (const auto& [n, v] : constants_) names.push_back(n);
-    return joined(names);
+    return io::join(names);
   }
 
   // The names an expression may read: the domain's variables (slots 0 … d−1) and constants.
@@ -230,8 +224,8 @@ class Pde final : public Problem {
     const std::vector<std::string> inputs = domain_.input_names();
     for (std::size_t a = 0; a < inputs.size(); ++a) s.slots.emplace_back(inputs[a], static_cast<int>(a));
     s.constants = constants_;
-    s.valid_names = (with_outputs ? "outputs: " + joined(outputs_) + "; " : std::string()) +
-                    "variables: " + joined(inputs) +
+    s.valid_names = (with_outputs ? "outputs: " + io::join(outputs_) + "; " : std::string()) +
+                    "variables: " + io::join(inputs) +
                     (constants_.empty() ? std::string() : "; constants: " + constant_names());
     return s;
   }
@@ -289,7 +283,7 @@ class Pde final : public Problem {
       return item.is_map() ? item.error("expr", message) : item.error(message);
     };
     if (symbols.empty())
-      throw error("the residual '" + text + "' reads no output (outputs: " + joined(outputs_) +
+      throw error("the residual '" + text + "' reads no output (outputs: " + io::join(outputs_) +
                   "); write it with u, u_x, lap(u), …");
     if (static_cast<int>(symbols.size()) > kMaxExpressionReads)
       throw error("the residual reads " + std::to_string(symbols.size()) + " derivative symbols; at most " +
@@ -363,13 +357,13 @@ class Pde final : public Problem {
     };
     if (!node.has_map("exact")) {
       node.require("exact", output_dim() == 1,
-                   "expected a mapping of output names to expressions (outputs: " + joined(outputs_) + ")");
+                   "expected a mapping of output names to expressions (outputs: " + io::join(outputs_) + ")");
       exact_.push_back(compile(node, "exact"));
     } else {
       const io::ConfigNode exact = node.child("exact");
       for (const std::string& key : exact.keys())
         if (!contains(outputs_, key))
-          throw exact.error(key, "'" + key + "' is no output (outputs: " + joined(outputs_) + ")");
+          throw exact.error(key, "'" + key + "' is no output (outputs: " + io::join(outputs_) + ")");
       for (const std::string& output : outputs_) {
         if (!exact.has(output)) throw exact.error("missing the exact solution of output '" + output + "'");
         exact_.push_back(compile(exact, output));

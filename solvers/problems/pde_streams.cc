@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: MIT
 #include "solvers/problems/pde_streams.h"
+#include "io/text.h"
 
 #include <algorithm>
 #include <map>
@@ -8,12 +9,6 @@
 
 namespace nfield::solvers {
 namespace {
-
-std::string joined(const std::vector<std::string>& names) {
-  std::string out;
-  for (const std::string& n : names) out += (out.empty() ? "" : ", ") + n;
-  return out;
-}
 
 int index_of(const std::vector<std::string>& names, std::string_view name) {
   const auto at = std::find(names.begin(), names.end(), name);
@@ -30,7 +25,7 @@ std::optional<DerivativeSymbol> operator_symbol(std::string_view name, const std
     const int output = index_of(outputs, argument);
     if (output < 0)
       throw std::invalid_argument(std::string(name) + ": '" + std::string(argument) +
-                                  "' is no output (outputs: " + joined(outputs) + ")");
+                                  "' is no output (outputs: " + io::join(outputs) + ")");
     if (space_dim < 1) throw std::invalid_argument(std::string(name) + ": the domain has no space axes");
     DerivativeSymbol symbol;
     symbol.kind = kind;
@@ -140,7 +135,7 @@ std::optional<DerivativeSymbol> parse_derivative_symbol(std::string_view name,
     }
     if (c == 'x' || c == 'y' || c == 'z' || c == 't')
       throw std::invalid_argument(std::string(name) + ": the domain has no variable '" + std::string(1, c) +
-                                  "' (variables: " + joined(inputs) + ")");
+                                  "' (variables: " + io::join(inputs) + ")");
     return std::nullopt;  // not a derivative symbol: an unknown name
   }
   if (symbol.axes.empty()) return std::nullopt;
