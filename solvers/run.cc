@@ -213,9 +213,11 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
     finished = trainer.run(callbacks);
   }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-  if (trainer.divergence())
-    std::printf("diverged: writing the checkpoint and outputs of the last finite parameters (step %ld)\n",
-                trainer.divergence()->last_finite_step);
+  if (const auto& d = trainer.divergence())
+    std::printf(d->last_finite_step > 0
+                    ? "diverged: writing the checkpoint and outputs of the last finite parameters (step %ld)\n"
+                    : "diverged: writing the checkpoint and outputs of the parameters the run started from\n",
+                d->last_finite_step);
   else if (!finished)
     std::printf("\ninterrupted at step %ld: writing the checkpoint and outputs\n", trainer.step());
   write_checkpoint(dir / "checkpoint.h5", field, trainer, *setup.problem, config_text, config_dir);

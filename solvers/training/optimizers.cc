@@ -369,7 +369,8 @@ class LbfgsOptimizer final : public OptimizerOf<LbfgsOptimizer, LbfgsStageOption
       field.parameters() = theta.cast<Scalar>();
       // Ceres refuses to start from a point whose loss or gradient is not finite: the run has
       // diverged before this stage (find out where, for the report).
-      if (summary.termination_type == ceres::FAILURE && !std::isfinite(summary.initial_cost)) {
+      // (Its initial_cost stays at its default, -1, when that first evaluation fails.)
+      if (summary.termination_type == ceres::FAILURE && summary.iterations.empty()) {
         autodiff::Vector<Scalar> gradient(field.parameter_count());
         stage.loss_and_gradient(field.parameters().data(), gradient.data());
         if (!stage.check_finite(gradient.data())) return false;

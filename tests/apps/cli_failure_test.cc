@@ -106,6 +106,31 @@ TEST(DivergenceTest, RestoreAndHalveRetriesABoundedNumberOfTimes) {
   expect_finite_field(dir / "many" / "checkpoint.h5");
 }
 
+// An L-BFGS or LM stage that would start on a non-finite loss (here a source that is NaN on
+// the whole domain) stops the run there, as Adam does, instead of ending as a failed stage.
+TEST(DivergenceTest, CeresStagesStopWhereTheyWouldStartOnANonFiniteLoss) {
+  const auto dir = scratch_dir();
+  for (const std::string optimizer : {"lbfgs", "lm"}) {
+    SCOPED_TRACE(optimizer);
+    write_text(dir / "nan.yaml", "problem: pde\ndomain: {lower: [0], upper: [1]}\n"
+                                 "equation: {residuals: [\"u_xx - sqrt(x - 2)\"]}\n"
+                                 "field: {type: siren, hidden: [8]}\n"
+                                 "training:\n  threads: 1\n  batch: {interior: 32}\n  stages:\n"
+                                 "    - {optimizer: " + optimizer + ", steps: 10}\n    - {optimizer: adam, steps: 5}\n"
+                                 "output: {grid: [9], png: false}\n");
+    const Outcome o = run_nfield({"run", (dir / "nan.yaml").string(), "--out", (dir / optimizer).string()}, dir,
+                                 dir / "capture");
+    ASSERT_EQ(o.code, 3) << describe(o);
+    const nlohmann::json m = read_json(dir / optimizer / "metrics.json");
+    EXPECT_EQ(m["divergence"]["optimizer"], optimizer);
+    EXPECT_EQ(m["divergence"]["step"], 1);
+    EXPECT_EQ(m["divergence"]["what"], "loss term 'pde'");
+    EXPECT_EQ(m["divergence"]["last_finite_step"], 0);
+    EXPECT_TRUE(m["stages"].empty());
+    EXPECT_NE(o.out.find("no step of this run had a finite loss"), std::string::npos) << o.out;
+  }
+}
+
 // An L-BFGS stage in float ends when its steps no longer change the parameters (at the
 // rounding of float), long before 20,000 iterations (about 600 here): metrics.json records the iterations it took, why it
 // ended and Ceres' own words, and the progress output says so; the next stage still runs.
