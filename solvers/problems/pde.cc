@@ -173,21 +173,28 @@ class Pde final : public Problem {
           : contains(outputs_, name.substr(0, name.find('_'))) ? "reads as an output or its derivative"
                                                                 : "";
       if (!problem.empty()) throw node.error(name, "constant name '" + name + "' " + problem);
-      io::ExpressionScope scope;
-      scope.constants = constants_;
-      scope.valid_names = "constants before this one: " +
-                          (constants_.empty() ? std::string("none") : constant_names()) +
-                          "; pi, e; a constant reads no variable or output";
-      try {
-        const io::CompiledExpression e(node.get<std::string>(name), scope);
-        std::vector<double> scratch;
-        const double value = e.evaluate<double>(nullptr, scratch);
-        note_constants(e);
-        node.require(name, std::isfinite(value), "constant '" + name + "' is not finite");
-        constants_.emplace_back(name, value);
-      } catch (const io::ExpressionError& e) {
-        throw node.expression_error(name, e);
-      }
+      const double value = constant_expression(
+          node, name,
+          "constants before this one: " + (constants_.empty() ? std::string("none") : constant_names()) +
+              "; pi, e; a constant reads no variable or output");
+      node.require(name, std::isfinite(value), "constant '" + name + "' is not finite");
+      constants_.emplace_back(name, value);
+    }
+  }
+
+  // The value of node[key], an expression of the constants read so far (`valid` names them in
+  // its errors).
+  double constant_expression(const io::ConfigNode& node, const std::string& key, const std::string& valid) {
+    io::ExpressionScope scope;
+    scope.constants = constants_;
+    scope.valid_names = valid;
+    try {
+      const io::CompiledExpression e(node.get<std::string>(key), scope);
+      std::vector<double> scratch;
+      note_constants(e);
+      return e.evaluate<double>(nullptr, scratch);
+    } catch (const io::ExpressionError& e) {
+      throw node.expression_error(key, e);
     }
   }
 
@@ -381,18 +388,8 @@ class Pde final : public Problem {
                  "of size 1 and time)");
     node.require("solution", domain_.time().first >= 0 && domain_.time().second <= 10,
                  "burgers_sine is computed for t in [0, 10]");
-    io::ExpressionScope constant_scope;
-    constant_scope.constants = constants_;
-    constant_scope.valid_names = "constants: " + (constants_.empty() ? std::string("none") : constant_names());
-    double nu = NAN;
-    try {
-      const io::CompiledExpression e(node.get<std::string>("nu"), constant_scope);
-      std::vector<double> scratch;
-      nu = e.evaluate<double>(nullptr, scratch);
-      note_constants(e);
-    } catch (const io::ExpressionError& e) {
-      throw node.expression_error("nu", e);
-    }
+    const double nu = constant_expression(
+        node, "nu", "constants: " + (constants_.empty() ? std::string("none") : constant_names()));
     BurgersSineOptions options;
     options.nu = nu;
     node.require("nu", nu >= 1e-4 && nu <= 1e3, "expected a viscosity in [1e-4, 1e3]");

@@ -304,7 +304,10 @@ void Trainer<Scalar>::record_divergence(std::string what) {
   d.optimizer = options_.stages[stage_].optimizer;
   d.what = std::move(what);
   d.last_finite_step = last_finite_step_;
-  d.last_finite_loss = last_finite_loss_;
+  if (!last_finite_losses_.empty()) {
+    d.last_finite_loss = 0;
+    for (double l : last_finite_losses_) d.last_finite_loss += l;  // in the order metrics.json sums
+  }
   divergence_ = std::move(d);
 }
 
@@ -356,7 +359,6 @@ void Trainer<Scalar>::finish_step(double learning_rate, double milliseconds) {
   for (double l : losses_) total += l;
   if (std::isfinite(total)) {
     last_finite_step_ = global_step_;
-    last_finite_loss_ = total;
     last_finite_losses_ = losses_;
   }
   if (callbacks_->progress) callbacks_->progress(progress(learning_rate));

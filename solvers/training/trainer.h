@@ -219,8 +219,7 @@ class Trainer {
   StageEnd stage_end_;                    // of the current stage, filled in as it ends
   std::optional<Divergence> divergence_;  // set when a step went non-finite
   long last_finite_step_ = 0;
-  double last_finite_loss_ = std::numeric_limits<double>::quiet_NaN();
-  std::vector<double> last_finite_losses_;  // per term, at last_finite_step_
+  std::vector<double> last_finite_losses_;  // per term, at last_finite_step_ (empty: none yet)
   int divergence_retries_ = 0;            // taken so far (training.on_divergence)
   std::unique_ptr<Optimizer> optimizer_;  // of the current stage, while it runs or resumes
   const Callbacks* callbacks_ = nullptr;  // of the current run()
