@@ -279,6 +279,11 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
   if (grid.has_error) {
     metrics["rel_l2"] = grid.rel_l2;
     metrics["max_abs_err"] = grid.max_abs_err;
+    const std::vector<std::string> names = setup.problem->output_names();
+    for (size_t c = 0; names.size() > 1 && c < names.size() && c < grid.output_rel_l2.size(); ++c) {
+      metrics["rel_l2_" + names[c]] = grid.output_rel_l2[c];
+      metrics["max_abs_err_" + names[c]] = grid.output_max_abs_err[c];
+    }
     if (!grid.frame_rel_l2.empty()) {
       metrics["max_frame_rel_l2"] = *std::max_element(grid.frame_rel_l2.begin(), grid.frame_rel_l2.end());
       metrics["frame_rel_l2"] = grid.frame_rel_l2;
