@@ -11,11 +11,14 @@
 //     residuals:                      # each "= 0", its own loss term
 //       - "u_t + u*u_x - nu*u_xx"     # name pde, batch interior, weight 1
 //       - {expr: "u_x + u - 1", on: [x_max], weight: 10, name: robin}   # on faces
-//   conditions:                       # as for poisson and wave (solvers/conditions/conditions.h)
-//     - {on: boundary, type: dirichlet, value: "0"}
-//     - {on: initial, type: value, value: "-sin(pi*x)"}
-//   reference:
+//   conditions:                       # by output name (solvers/conditions/condition_list.h)
+//     - {on: [x_min, x_max], type: dirichlet, value: {u: "0"}}
+//     - {on: initial, type: value, value: {u: "-sin(pi*x)"}}
+//     - {on: [x_max], type: residual, residual: "u_x + u - 1"}   # boundary_residual_2
+//   reference:                        # solvers/problems/pde_reference.h
 //     exact: {u: "sin(pi*x)*exp(-t)"} # optional, an expression per output: error metrics
+//   # or `file: data.csv` (CSV, COMSOL table, F.h5:/dataset; `columns` maps names), whose
+//   # points give rel_l2 and max_abs_err per output and over all outputs in metrics.json;
 //   # or a solution the project computes: `solution: burgers_sine, nu: nu`, the Cole–Hopf
 //   # solution of u_t + u u_x = ν u_xx from −sin πx (solvers/problems/burgers_reference.h)
 //
@@ -27,9 +30,13 @@
 // lap(u), bilap(u)); each residual asks the field for exactly the streams of the symbols it
 // reads, and its adjoint comes from ceres::Jet (solvers/problems/pde_residual.h).
 //
+// Conditions of `type: residual` are compiled exactly as residuals with `on` are (one
+// function, compile_residual); the others become loss terms in solvers/conditions/conditions.h
+// or the ansatz of solvers/conditions/hard_constraints.h.
+//
 // The constants are numbers in every expression of the config: residuals, reference.exact,
-// later constants and the conditions' values. One no expression reads is an error (a typo,
-// as an unknown key is).
+// later constants and the conditions' values and coefficients. One no expression reads is an
+// error (a typo, as an unknown key is).
 // Limits: a residual reads at most 32 symbols; hard conditions (enforce: hard) take no
 // residual of order above 2.
 #include <algorithm>

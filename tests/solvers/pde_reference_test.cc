@@ -205,6 +205,31 @@ output: {grid: [5, 5], png: false}
   EXPECT_GT(metrics["rel_l2"].get<double>(), 0);
 }
 
+// reference.exact with two outputs: the grid's errors per output beside the overall ones.
+TEST(PdeReference, ExactGivesGridErrorsPerOutput) {
+  const fs::path dir = folder("exact_run");
+  write_text(dir / "run.yaml", std::string(kHead) + "  exact: {u: \"sin(pi*x)*y\", v: \"x + y^2\"}\n" + R"yaml(conditions:
+  - {on: boundary, type: dirichlet, value: {u: "sin(pi*x)*y", v: "x + y^2"}}
+field: {type: siren, hidden: [8], first_omega: 2, hidden_omega: 1}
+training:
+  seed: 0
+  threads: 1
+  precision: double
+  batch: {interior: 32, boundary: 16}
+  stages: [{optimizer: adam, steps: 3, lr: 1.0e-3}]
+output: {grid: [5, 5], png: false}
+)yaml");
+  RunSetup setup = load_run(dir / "run.yaml", {"output.dir=" + (dir / "out").string()});
+  ASSERT_EQ(execute_run(setup), 0);
+  const nlohmann::json m = nlohmann::json::parse(std::ifstream(dir / "out" / "metrics.json"));
+  ASSERT_TRUE(m.contains("rel_l2_u") && m.contains("rel_l2_v")) << m.dump();
+  EXPECT_FALSE(m.contains("reference_points"));
+  EXPECT_EQ(m["max_abs_err"], std::max(m["max_abs_err_u"].get<double>(), m["max_abs_err_v"].get<double>()));
+  const double all = m["rel_l2"], u = m["rel_l2_u"], v = m["rel_l2_v"];
+  EXPECT_LE(all, std::max(u, v));
+  EXPECT_GE(all, std::min(u, v));
+}
+
 TEST(PdeReference, RefusedFilesAreLocated) {
   using testutil::expect_located_error;
   const fs::path dir = folder("refused");
