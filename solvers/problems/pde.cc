@@ -308,10 +308,7 @@ class Pde final : public Problem {
       r.name = "pde" + suffix;
       r.batch_key = "interior";
     }
-    if (item.is_map())
-      compile_residual(text, item, "expr", r);
-    else
-      compile_residual(text, item, std::nullopt, r);
+    compile_residual(text, item, item.is_map() ? std::optional<std::string>("expr") : std::nullopt, r);
     if (item.is_map()) item.reject_unknown_keys();
     return r;
   }

@@ -79,27 +79,52 @@ void PdeReference::read_named_solution(const io::ConfigNode& node, int outputs, 
   burgers_ = options;
 }
 
+// The file's column of each variable, then of each output, and where to blame a missing one.
+struct ReferenceColumns {
+  std::vector<std::pair<std::string, std::string>> column;  // name → column
+  std::optional<io::ConfigNode> columns;                     // reference.columns
+  io::ConfigNode node;                                       // reference
+
+  const std::string& of(std::size_t k) const { return column[k].second; }
+  // A missing column is the columns entry's fault where it named one, else the file's.
+  io::ConfigError located(std::size_t k, const io::TableError& e) const {
+    const std::string& name = column[k].first;
+    return columns && columns->has(name) ? columns->error(name, e.what()) : node.error("file", e.what());
+  }
+  Eigen::VectorXd read(const io::PointTable& table, std::size_t k) const {
+    try {
+      return table.column(of(k));
+    } catch (const io::TableError& e) {
+      throw located(k, e);
+    }
+  }
+};
+
+namespace {
+
+ReferenceColumns column_names(const io::ConfigNode& node, const std::vector<std::string>& variables,
+                         const std::vector<std::string>& outputs) {
+  ReferenceColumns names{{}, std::nullopt, node};
+  if (node.has("columns")) {
+    names.columns = node.child("columns");
+    names.columns->require(names.columns->is_map(), "expected a mapping of variable and output names to column names");
+    for (const std::string& key : names.columns->keys())
+      if (!contains(variables, key) && !contains(outputs, key))
+        throw names.columns->error(key, "'" + key + "' is neither a variable nor an output (variables: " +
+                                            io::join(variables) + "; outputs: " + io::join(outputs) + ")");
+  }
+  for (const auto* list : {&variables, &outputs})
+    for (const std::string& name : *list)
+      names.column.emplace_back(name, names.columns && names.columns->has(name) ? names.columns->get<std::string>(name) : name);
+  return names;
+}
+
+}  // namespace
+
 // `file` and `columns`: see the header.
 void PdeReference::read_file(const io::ConfigNode& node, const std::vector<std::string>& outputs,
                              const std::filesystem::path& config_dir) {
-  const std::vector<std::string> variables = domain_.input_names();
-  std::vector<std::pair<std::string, std::string>> column;  // name → column, variables then outputs
-  std::optional<io::ConfigNode> columns;
-  if (node.has("columns")) {
-    columns = node.child("columns");
-    columns->require(columns->is_map(), "expected a mapping of variable and output names to column names");
-    for (const std::string& key : columns->keys())
-      if (!contains(variables, key) && !contains(outputs, key))
-        throw columns->error(key, "'" + key + "' is neither a variable nor an output (variables: " +
-                                      io::join(variables) + "; outputs: " + io::join(outputs) + ")");
-  }
-  for (const auto* names : {&variables, &outputs})
-    for (const std::string& name : *names)
-      column.emplace_back(name, columns && columns->has(name) ? columns->get<std::string>(name) : name);
-  // A missing column is the columns entry's fault where it named one, else the file's.
-  const auto located = [&](const std::string& name, const io::TableError& e) {
-    return columns && columns->has(name) ? columns->error(name, e.what()) : node.error("file", e.what());
-  };
+  const ReferenceColumns names = column_names(node, domain_.input_names(), outputs);
   std::string source = node.get<std::string>("file");
   if (std::filesystem::path(source).is_relative()) source = (config_dir / source).string();
   io::PointTable table;
@@ -109,71 +134,63 @@ void PdeReference::read_file(const io::ConfigNode& node, const std::vector<std::
     throw node.error("file", e.what());
   }
   const int d = domain_.input_dim(), n_out = static_cast<int>(outputs.size());
-  const bool timed = domain_.has_time() && !table.has(column[static_cast<size_t>(domain_.time_column())].second);
+  const bool timed = domain_.has_time() && !table.has(names.of(static_cast<size_t>(domain_.time_column())));
   const int coordinates = timed ? domain_.space_dim() : d;
   Eigen::MatrixXd space(table.rows(), coordinates);
+  std::vector<std::string> coordinate_columns;
   for (int a = 0; a < coordinates; ++a) {
-    const auto& [name, col] = column[static_cast<size_t>(a)];
-    try {
-      space.col(a) = table.column(col);
-    } catch (const io::TableError& e) {
-      throw located(name, e);
-    }
+    space.col(a) = names.read(table, static_cast<size_t>(a));
+    coordinate_columns.push_back(table.names[static_cast<size_t>(table.index(names.of(static_cast<size_t>(a))))]);
   }
   std::vector<double> lower(domain_.lower()), upper(domain_.upper());
   if (!timed && domain_.has_time()) {
     lower.push_back(domain_.time().first);
     upper.push_back(domain_.time().second);
   }
-  std::vector<std::string> coordinate_columns;
-  for (int a = 0; a < coordinates; ++a) coordinate_columns.push_back(table.names[static_cast<size_t>(table.index(column[static_cast<size_t>(a)].second))]);
   try {
     io::require_inside_box(table, coordinate_columns, lower, upper);
   } catch (const io::TableError& e) {
     throw node.error("file", e.what());
   }
-  if (!timed) {
-    points_ = space;
-    values_.resize(table.rows(), n_out);
-    for (int c = 0; c < n_out; ++c) {
-      const auto& [name, col] = column[static_cast<size_t>(d + c)];
-      try {
-        values_.col(c) = table.column(col);
-      } catch (const io::TableError& e) {
-        throw located(name, e);
-      }
-    }
-    return;
-  }
-  // COMSOL layout: one column per output and time, every output at the same times.
-  std::vector<std::vector<io::TimedColumn>> timed_columns;
+  if (timed) return read_timed_columns(table, names, space, outputs);
+  points_ = space;
+  values_.resize(table.rows(), n_out);
+  for (int c = 0; c < n_out; ++c) values_.col(c) = names.read(table, static_cast<size_t>(d + c));
+}
+
+// COMSOL layout: one column per output and time, every output at the same times.
+void PdeReference::read_timed_columns(const io::PointTable& table, const ReferenceColumns& names,
+                                      const Eigen::MatrixXd& space, const std::vector<std::string>& outputs) {
+  const int d = domain_.input_dim(), n_out = static_cast<int>(outputs.size());
+  const auto [t0, t1] = domain_.time();
+  std::vector<std::vector<io::TimedColumn>> timed;
   for (int c = 0; c < n_out; ++c) {
-    const auto& [name, col] = column[static_cast<size_t>(d + c)];
-    timed_columns.push_back(table.times(col));
-    const auto& times = timed_columns.back();
+    const std::size_t k = static_cast<size_t>(d + c);
+    timed.push_back(table.times(names.of(k)));
+    const auto& times = timed.back();
     if (times.empty())
-      throw located(name, io::TableError(table.source, 0, 0,
-                                         "no column '" + column[static_cast<size_t>(domain_.time_column())].second +
-                                             "' and no columns '" + col + " @ t=…' (columns: " +
-                                             io::join(table.names) + ")"));
-    for (std::size_t k = 0; k < times.size(); ++k) {
-      if (times[k].time < domain_.time().first - 1e-9 * (domain_.time().second - domain_.time().first) ||
-          times[k].time > domain_.time().second + 1e-9 * (domain_.time().second - domain_.time().first))
-        throw node.error("file", table.source + ": column '" + table.names[static_cast<size_t>(times[k].index)] +
-                                     "' lies outside the domain's time interval");
-      if (c > 0 && (times.size() != timed_columns[0].size() || times[k].time != timed_columns[0][k].time))
-        throw located(name, io::TableError(table.source, 0, 0,
-                                           "output '" + name + "' has other times than output '" + outputs[0] + "'"));
+      throw names.located(k, io::TableError(table.source, 0, 0,
+                                            "no column '" + names.of(static_cast<size_t>(domain_.time_column())) +
+                                                "' and no columns '" + names.of(k) + " @ t=…' (columns: " +
+                                                io::join(table.names) + ")"));
+    for (std::size_t j = 0; j < times.size(); ++j) {
+      if (times[j].time < t0 - 1e-9 * (t1 - t0) || times[j].time > t1 + 1e-9 * (t1 - t0))
+        throw names.node.error("file", table.source + ": column '" + table.names[static_cast<size_t>(times[j].index)] +
+                                           "' lies outside the domain's time interval");
+      if (c > 0 && (times.size() != timed[0].size() || times[j].time != timed[0][j].time))
+        throw names.located(k, io::TableError(table.source, 0, 0,
+                                              "output '" + outputs[static_cast<size_t>(c)] +
+                                                  "' has other times than output '" + outputs[0] + "'"));
     }
   }
-  const Eigen::Index rows = table.rows(), frames = static_cast<Eigen::Index>(timed_columns[0].size());
+  const Eigen::Index rows = table.rows(), frames = static_cast<Eigen::Index>(timed[0].size());
   points_.resize(rows * frames, d);
   values_.resize(rows * frames, n_out);
-  for (Eigen::Index k = 0; k < frames; ++k) {
-    points_.middleRows(k * rows, rows).leftCols(coordinates) = space;
-    points_.middleRows(k * rows, rows).col(domain_.time_column()).setConstant(timed_columns[0][static_cast<size_t>(k)].time);
+  for (Eigen::Index j = 0; j < frames; ++j) {
+    points_.middleRows(j * rows, rows).leftCols(space.cols()) = space;
+    points_.middleRows(j * rows, rows).col(domain_.time_column()).setConstant(timed[0][static_cast<size_t>(j)].time);
     for (int c = 0; c < n_out; ++c)
-      values_.middleRows(k * rows, rows).col(c) = table.values.col(timed_columns[static_cast<size_t>(c)][static_cast<size_t>(k)].index);
+      values_.middleRows(j * rows, rows).col(c) = table.values.col(timed[static_cast<size_t>(c)][static_cast<size_t>(j)].index);
   }
 }
 

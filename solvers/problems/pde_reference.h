@@ -37,6 +37,10 @@
 #include "solvers/domain.h"
 #include "solvers/problems/burgers_reference.h"
 
+namespace nfield::io {
+struct PointTable;
+}  // namespace nfield::io
+
 namespace nfield::solvers {
 
 // How the problem compiles an expression of the variables and constants at node[key]
@@ -45,6 +49,8 @@ struct PdeExpressions {
   std::function<io::CompiledExpression(const io::ConfigNode& node, const std::string& key)> compile;
   std::function<double(const io::ConfigNode& node, const std::string& key)> constant;
 };
+
+struct ReferenceColumns;  // pde_reference.cc
 
 class PdeReference {
  public:
@@ -65,6 +71,8 @@ class PdeReference {
   void read_named_solution(const io::ConfigNode& node, int outputs, const PdeExpressions& e);
   void read_file(const io::ConfigNode& node, const std::vector<std::string>& outputs,
                  const std::filesystem::path& config_dir);
+  void read_timed_columns(const io::PointTable& table, const ReferenceColumns& names,
+                          const Eigen::MatrixXd& space, const std::vector<std::string>& outputs);
 
   Domain domain_{{0.0}, {1.0}};
   std::vector<io::CompiledExpression> exact_;

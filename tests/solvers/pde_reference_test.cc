@@ -176,6 +176,10 @@ reference: {file: timed.txt}
   EXPECT_EQ(seen(14, 0), 1);
   EXPECT_EQ(seen(14, 1), 1);
   EXPECT_NEAR(metric(metrics, "max_abs_err"), 0.001, 1e-12);
+  // A time column after t1 lies outside the domain.
+  table.replace(table.find("@ t=1\n"), 6, "@ t=2\n");
+  write_text(dir / "timed.txt", table);
+  testutil::expect_located_error(dir / "timed.yaml", {5, 19, "reference.file", "column 'u (m) @ t=2' lies outside the domain's time interval"});
 }
 
 // A short `nfield run` of a file reference: metrics.json has the errors at its points, and
