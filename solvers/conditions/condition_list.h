@@ -21,7 +21,7 @@
 // shared by the outputs `value` constrains; ∂/∂n is along each face's outward normal.
 // Periodic pairs opposite faces of one axis: at each pair of points that differ only in that
 // axis, the values and the derivatives along it agree (one loss term over groups of two
-// points, so Adam and L-BFGS train it, Levenberg–Marquardt does not); `outputs` (default
+// points, so Adam and L-BFGS train it; an lm stage is refused at load); `outputs` (default
 // all) names the outputs it ties.
 //
 // `weight` (default 1, ≥ 0) scales the item's loss term; `enforce: hard` (dirichlet and

@@ -372,6 +372,10 @@ conditions:
                        {7, 48, "conditions[0].values", "unknown key 'values'"});
   expect_located_error(item("bad_type", "{on: [x_max], type: mixed, value: \"0\"}"),
                        {7, 25, "conditions[0].type", "dirichlet, neumann, robin, periodic, residual"});
+  // Levenberg–Marquardt takes no periodic term (groups of points): refused at load.
+  expect_located_error(write_config("periodic_lm", head + "  - {on: [x_min, x_max], type: periodic}\n" +
+                                                       "training:\n  stages: [{optimizer: lm, steps: 3}]\n"),
+                       {9, 24, "training.stages[0].optimizer", "loss term 'periodic' reads groups of points"});
   // Residual items belong to problem: pde.
   expect_located_error(write_config("poisson_residual", R"yaml(problem: poisson
 domain: {lower: [0], upper: [1]}
