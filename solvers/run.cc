@@ -279,6 +279,11 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
   if (grid.has_error) {
     metrics["rel_l2"] = grid.rel_l2;
     metrics["max_abs_err"] = grid.max_abs_err;
+    const std::vector<std::string> names = setup.problem->output_names();
+    for (size_t c = 0; names.size() > 1 && c < names.size() && c < grid.output_rel_l2.size(); ++c) {
+      metrics["rel_l2_" + names[c]] = grid.output_rel_l2[c];
+      metrics["max_abs_err_" + names[c]] = grid.output_max_abs_err[c];
+    }
     if (!grid.frame_rel_l2.empty()) {
       metrics["max_frame_rel_l2"] = *std::max_element(grid.frame_rel_l2.begin(), grid.frame_rel_l2.end());
       metrics["frame_rel_l2"] = grid.frame_rel_l2;
@@ -307,12 +312,14 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
   return finished ? 0 : trainer.divergence() ? kExitDiverged : 130;
 }
 
-// Stages whose optimizer cannot take the problem's size (an lm stage's dense Jacobian has
-// to fit Ceres' int-indexed matrices) are reported at load time, not after the stages before
-// them have run (the optimizer checks again when its stage starts).
+// Stages whose optimizer cannot take the problem (an lm stage's dense Jacobian has to fit
+// Ceres' int-indexed matrices; it takes no term over groups of points) are reported at load
+// time, not after the stages before them have run (the optimizer checks again when its stage
+// starts).
 void check_stage_sizes(const RunSetup& s) {
   std::optional<double> rows;
   std::optional<Eigen::Index> parameters;
+  std::optional<std::string> grouped;
   const ProblemSize size{
       .residual_rows =
           [&] {
@@ -334,6 +341,21 @@ void check_stage_sizes(const RunSetup& s) {
           [&] {
             if (!parameters) parameters = fields::Field<double>(s.field).parameter_count();
             return *parameters;
+          },
+      .grouped_term =
+          [&] {
+            if (!grouped) {
+              grouped.emplace();
+              Random rng(0);
+              for (const LossTerm& term : s.problem->loss_terms()) {
+                const TermPoints points = term.sample(rng, 1);
+                if (!points.groups.empty() || points.tangents.size() > 0) {
+                  *grouped = term.name;
+                  break;
+                }
+              }
+            }
+            return *grouped;
           }};
   for (std::size_t i = 0; i < s.training.stages.size(); ++i) {
     const std::string refusal = s.training.stages[i].settings->refuse(size);

@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: MIT
 //
-// What a condition item of the `conditions:` list (solvers/conditions/conditions.h) says about where and
-// what: the faces its `on` names and its per-channel value expressions. Soft conditions
-// (conditions.cc) and hard ones (hard_constraints.cc) read items through these.
+// What a condition item of the `conditions:` list says about where and what: the faces its
+// `on` names and its per-channel value expressions. read_conditions
+// (solvers/conditions/condition_list.h) reads items through these; pde's residuals with `on`
+// and helmholtz's per-channel expressions use them too.
 #pragma once
 
 #include <string_view>

@@ -1,106 +1,119 @@
 // SPDX-License-Identifier: MIT
 #include "solvers/conditions/conditions.h"
 
-#include "io/text.h"
 #include "solvers/conditions/condition_values.h"
-#include "solvers/conditions/hard_constraints.h"
+#include "solvers/conditions/periodic.h"
 
 namespace nfield::solvers {
 
 namespace {
 
-LinearResidual value_residual(const Eigen::MatrixXd& target) {
+// The constrained outputs' values at x (n × item.outputs.size()).
+Eigen::MatrixXd targets(const ConditionItem& item, const Eigen::MatrixXd& x) {
+  Eigen::MatrixXd g(x.rows(), static_cast<Eigen::Index>(item.outputs.size()));
+  for (size_t k = 0; k < item.outputs.size(); ++k)
+    g.col(static_cast<Eigen::Index>(k)) = item.values[static_cast<size_t>(item.outputs[k])]->evaluate(x);
+  return g;
+}
+
+// Component k reads output item.outputs[k] from `stream`.
+LinearResidual value_residual(const ConditionItem& item, const Eigen::MatrixXd& x, int stream) {
   std::vector<LinearResidual::Term> terms;
-  for (Eigen::Index c = 0; c < target.cols(); ++c)
-    terms.push_back({static_cast<int>(c), 0, static_cast<int>(c), Eigen::VectorXd::Ones(1)});
-  return LinearResidual(std::move(terms), target);
+  for (size_t k = 0; k < item.outputs.size(); ++k)
+    terms.push_back({static_cast<int>(k), stream, item.outputs[k], Eigen::VectorXd::Ones(1)});
+  return LinearResidual(std::move(terms), targets(item, x));
+}
+
+// Each point's outward normal (n × space_dim), from the face coordinate it was put on.
+Eigen::MatrixXd outward_normals(const Domain& d, const std::vector<Face>& faces, const Eigen::MatrixXd& x) {
+  Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(x.rows(), d.space_dim());
+  for (Eigen::Index r = 0; r < x.rows(); ++r)
+    for (const Face& f : faces)
+      if (x(r, f.axis) == (f.upper ? d.upper()[f.axis] : d.lower()[f.axis])) {
+        normal(r, f.axis) = f.upper ? 1.0 : -1.0;
+        break;
+      }
+  return normal;
+}
+
+// a u + b ∂u/∂n − g (neumann: a absent, b = 1), from the gradient streams.
+std::unique_ptr<Residual> normal_residual(const ConditionItem& item, const Domain& d, const Eigen::MatrixXd& x) {
+  const Eigen::MatrixXd normal = outward_normals(d, item.faces, x);
+  const Eigen::VectorXd b = item.robin_b ? item.robin_b->evaluate(x) : Eigen::VectorXd::Ones(x.rows());
+  std::vector<LinearResidual::Term> t;
+  for (size_t k = 0; k < item.outputs.size(); ++k) {
+    const int c = item.outputs[k], component = static_cast<int>(k);
+    if (item.robin_a) t.push_back({component, 0, c, item.robin_a->evaluate(x)});
+    for (int a = 0; a < d.space_dim(); ++a)
+      t.push_back({component, 1 + a, c, item.robin_b ? Eigen::VectorXd(normal.col(a).cwiseProduct(b))
+                                                     : Eigen::VectorXd(normal.col(a))});
+  }
+  return std::make_unique<LinearResidual>(std::move(t), targets(item, x));
+}
+
+LossTerm term_of(const ConditionItem& item, const Domain& domain) {
+  LossTerm term;
+  term.weight = item.weight;
+  const auto shared = std::make_shared<const ConditionItem>(item);
+  if (item.initial) {
+    term.batch_key = "initial";
+    term.sample = [&domain](Random& rng, Eigen::Index n) { return domain.sample_initial(rng, n); };
+    term.spec = autodiff::StreamSpec::values(domain.input_dim());
+    int stream = 0;
+    term.name = "initial";
+    if (item.type == ConditionType::kInitialVelocity) {
+      term.name = "initial_velocity";
+      term.spec.tangents = Eigen::MatrixXd::Zero(domain.input_dim(), 1);
+      term.spec.tangents(domain.time_column(), 0) = 1.0;
+      stream = 1;
+    }
+    term.residual = [shared, stream](const Eigen::MatrixXd& x) {
+      return std::make_unique<LinearResidual>(value_residual(*shared, x, stream));
+    };
+    return term;
+  }
+  term.batch_key = "boundary";
+  term.sample = [&domain, faces = item.faces](Random& rng, Eigen::Index n) {
+    return domain.sample_faces(faces, rng, n);
+  };
+  switch (item.type) {
+    case ConditionType::kDirichlet:
+      term.name = "dirichlet";
+      term.spec = autodiff::StreamSpec::values(domain.input_dim());
+      term.residual = [shared](const Eigen::MatrixXd& x) {
+        return std::make_unique<LinearResidual>(value_residual(*shared, x, 0));
+      };
+      break;
+    case ConditionType::kNeumann:
+    case ConditionType::kRobin:
+      term.name = item.type == ConditionType::kNeumann ? "neumann" : "robin";
+      term.spec = autodiff::StreamSpec::gradient(domain.input_dim());
+      term.residual = [shared, d = &domain](const Eigen::MatrixXd& x) { return normal_residual(*shared, *d, x); };
+      break;
+    case ConditionType::kPeriodic:
+      term.name = "periodic";
+      term.spec = periodic_spec(domain, item.faces[0].axis);
+      term.sample = [&domain, face = item.faces[0]](Random& rng, Eigen::Index n) {
+        return periodic_points(domain, face, rng, n);
+      };
+      term.residual = [outputs = item.outputs](const TermPoints& points) {
+        return std::make_unique<PeriodicResidual>(points.groups, outputs);
+      };
+      break;
+    default:
+      break;
+  }
+  return term;
 }
 
 }  // namespace
 
-std::vector<LossTerm> condition_terms(const io::ConfigNode& conditions, const Domain& domain,
-                                      int output_dim, std::shared_ptr<const Ansatz>* ansatz,
-                                      const io::ExpressionConstants& constants) {
+std::vector<LossTerm> condition_terms(const std::vector<ConditionItem>& items, const Domain& domain) {
   std::vector<LossTerm> terms;
-  if (conditions.is_null()) return terms;
-  conditions.require(conditions.is_sequence(), "expected a list of conditions");
-  if (ansatz) *ansatz = read_ansatz(conditions, domain, output_dim, constants);
-  for (std::size_t i = 0; i < conditions.size(); ++i) {
-    const io::ConfigNode item = conditions.at(i);
-    if (item.get_choice("enforce", {"soft", "hard"}, "soft") == "hard") {
-      if (!ansatz)
-        throw item.error("enforce", "this problem does not support enforce: hard (poisson, pde and "
-                                    "wave do); use enforce: soft");
-      item.reject_unknown_keys();
-      continue;  // enforced by the ansatz, no loss term
-    }
-    const bool initial = item.has("on") && !item.has_list("on") &&
-                         io::to_lower(item.get<std::string>("on")) == "initial";
-    LossTerm term;
-    term.weight = item.get_or("weight", 1.0);
-    item.require("weight", term.weight >= 0, "expected a weight >= 0");
-    const auto values = channel_expressions(item, "value", domain, output_dim, constants);
-    if (initial) {
-      if (!domain.has_time()) throw item.error("on", "'initial' needs a domain with a time interval");
-      const std::string type = item.get_choice("type", {"value", "velocity"});
-      term.batch_key = "initial";
-      term.sample = [&domain](Random& rng, Eigen::Index n) { return domain.sample_initial(rng, n); };
-      if (type == "value") {
-        term.name = "initial";
-        term.spec = autodiff::StreamSpec::values(domain.input_dim());
-        term.residual = [values](const Eigen::MatrixXd& x) {
-          return std::make_unique<LinearResidual>(value_residual(evaluate_channels(values, x)));
-        };
-      } else {
-        term.name = "initial_velocity";
-        term.spec = autodiff::StreamSpec::values(domain.input_dim());
-        term.spec.tangents = Eigen::MatrixXd::Zero(domain.input_dim(), 1);
-        term.spec.tangents(domain.time_column(), 0) = 1.0;
-        term.residual = [values](const Eigen::MatrixXd& x) {
-          const Eigen::MatrixXd target = evaluate_channels(values, x);
-          std::vector<LinearResidual::Term> t;
-          for (Eigen::Index c = 0; c < target.cols(); ++c)
-            t.push_back({static_cast<int>(c), 1, static_cast<int>(c), Eigen::VectorXd::Ones(1)});
-          return std::make_unique<LinearResidual>(std::move(t), target);
-        };
-      }
-    } else {
-      const std::string type = item.get_choice("type", {"dirichlet", "neumann"});
-      const std::vector<Face> faces = condition_faces(item, domain);
-      term.batch_key = "boundary";
-      term.sample = [&domain, faces](Random& rng, Eigen::Index n) {
-        return domain.sample_faces(faces, rng, n);
-      };
-      if (type == "dirichlet") {
-        term.name = "dirichlet";
-        term.spec = autodiff::StreamSpec::values(domain.input_dim());
-        term.residual = [values](const Eigen::MatrixXd& x) {
-          return std::make_unique<LinearResidual>(value_residual(evaluate_channels(values, x)));
-        };
-      } else {
-        term.name = "neumann";
-        term.spec = autodiff::StreamSpec::gradient(domain.input_dim());
-        const Domain* d = &domain;
-        term.residual = [values, faces, d](const Eigen::MatrixXd& x) {
-          const Eigen::MatrixXd target = evaluate_channels(values, x);
-          // Each point's outward normal, from the face coordinate it was put on.
-          Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(x.rows(), d->space_dim());
-          for (Eigen::Index r = 0; r < x.rows(); ++r)
-            for (const Face& f : faces)
-              if (x(r, f.axis) == (f.upper ? d->upper()[f.axis] : d->lower()[f.axis])) {
-                normal(r, f.axis) = f.upper ? 1.0 : -1.0;
-                break;
-              }
-          std::vector<LinearResidual::Term> t;
-          for (Eigen::Index c = 0; c < target.cols(); ++c)
-            for (int a = 0; a < d->space_dim(); ++a)
-              t.push_back({static_cast<int>(c), 1 + a, static_cast<int>(c), normal.col(a)});
-          return std::make_unique<LinearResidual>(std::move(t), target);
-        };
-      }
-    }
-    if (!term.name.empty()) term.name += i > 0 ? "_" + std::to_string(i) : "";
-    item.reject_unknown_keys();
+  for (const ConditionItem& item : items) {
+    if (item.hard || item.type == ConditionType::kResidual) continue;
+    LossTerm term = term_of(item, domain);
+    if (item.index > 0) term.name += "_" + std::to_string(item.index);
     terms.push_back(std::move(term));
   }
   return terms;

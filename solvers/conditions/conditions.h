@@ -1,36 +1,31 @@
 // SPDX-License-Identifier: MIT
 //
-// Boundary and initial conditions from the `conditions:` list of a config:
+// The loss terms of the soft items of a `conditions:` list (read by read_conditions,
+// solvers/conditions/condition_list.h, which documents the keys):
 //
-//   - {on: boundary, type: dirichlet, value: "0"}            u = g on every space face
-//   - {on: [x_min, y_max], type: neumann, value: "x*y"}      ∂u/∂n = g (outward normal)
-//   - {on: initial, type: value, value: "sin(pi*x)"}         u(x, t0) = g
-//   - {on: initial, type: velocity, value: "0"}              u_t(x, t0) = g
+//   dirichlet   r = u − g                         on the faces, per constrained output
+//   neumann     r = ∂u/∂n − g                     n the outward normal of the point's face
+//   robin       r = a u + b ∂u/∂n − g
+//   periodic    r = (u(p) − u(p'), ∂ₐu(p) − ∂ₐu(p'))   p on the lower face of axis a, p' its
+//               partner on the upper face (groups of two points)
+//   initial     r = u(x, t0) − g,  velocity: r = u_t(x, t0) − g
 //
-// `value` is one expression, or a list with one per output channel (complex fields: real,
-// imaginary). `weight` (default 1) scales the term. Each condition is one loss term drawing
-// its points from the `boundary` (faces) or `initial` batch.
-//
-// `enforce: hard` (default soft) makes a Dirichlet or initial value/velocity condition exact
-// instead: no loss term, the field's output becomes u = A + D·N (solvers/conditions/hard_constraints.h
-// has the ansatz and its limits). Neumann conditions stay soft. Only problems that pass the
-// `ansatz` out-parameter (poisson, wave, pde) accept hard items; others reject them.
+// Each is one loss term drawing its points from the `boundary` (faces) or `initial` batch,
+// named after its type (dirichlet, neumann, robin, periodic, initial, initial_velocity) with
+// _i appended for item i > 0. An output an item leaves free (the mapping form of `value`)
+// has no component in its residual. Hard items give no term (the ansatz enforces them;
+// solvers/conditions/hard_constraints.h), residual items neither (problem: pde compiles them
+// with its equation residuals).
 #pragma once
 
-#include <memory>
 #include <vector>
 
-#include "io/config.h"
-#include "solvers/conditions/condition_values.h"
+#include "solvers/conditions/condition_list.h"
 #include "solvers/residual.h"
 
 namespace nfield::solvers {
 
-class Ansatz;
-// `constants`: named numbers the value expressions may read (problem: pde's `constants`).
-std::vector<LossTerm> condition_terms(const io::ConfigNode& conditions, const Domain& domain,
-                                      int output_dim,
-                                      std::shared_ptr<const Ansatz>* ansatz = nullptr,
-                                      const io::ExpressionConstants& constants = {});
+// `domain` must outlive the terms (their samplers read it).
+std::vector<LossTerm> condition_terms(const std::vector<ConditionItem>& items, const Domain& domain);
 
 }  // namespace nfield::solvers

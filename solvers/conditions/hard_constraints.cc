@@ -11,6 +11,7 @@
 
 #include "io/text.h"
 #include "solvers/conditions/condition_values.h"
+#include "solvers/conditions/condition_list.h"
 
 namespace nfield::solvers {
 
@@ -374,8 +375,11 @@ std::vector<LossTerm> with_ansatz(std::vector<LossTerm> terms, std::shared_ptr<c
                                   "conditions (enforce: hard) do not support; use enforce: soft");
     auto inner = std::move(term.residual);
     term.residual = [ansatz, inner = std::move(inner), spec = term.spec](const TermPoints& points) {
-      if (!points.groups.empty())
-        throw std::invalid_argument("hard conditions (enforce: hard) apply to per-point loss terms only");
+      // Groups are fine (u = A + D N point by point; a periodic pair reads two such points);
+      // per-point tangent directions are not: A and D's streams follow the spec's tangents.
+      if (points.tangents.size() > 0)
+        throw std::invalid_argument("hard conditions (enforce: hard) do not apply to loss terms with "
+                                    "per-point tangents");
       return std::make_unique<AnsatzResidual>(ansatz, inner(points), StreamLayout(spec), points.x);
     };
   }
@@ -418,47 +422,33 @@ std::string point_text(const Eigen::MatrixXd& x, Eigen::Index r) {
 
 }  // namespace
 
-std::shared_ptr<const Ansatz> read_ansatz(const io::ConfigNode& conditions, const Domain& domain,
-                                          int output_dim, const io::ExpressionConstants& constants) {
-  if (conditions.is_null() || !conditions.is_sequence()) return nullptr;
+std::shared_ptr<const Ansatz> read_ansatz(const std::vector<ConditionItem>& items, const Domain& domain,
+                                          int output_dim) {
   std::optional<Ansatz::Dirichlet> dirichlet;
   std::optional<io::ConfigNode> dirichlet_item, value_item, velocity_item;
   std::vector<io::Expression> u0, v0;
   double time_scale = 0;
-  for (std::size_t i = 0; i < conditions.size(); ++i) {
-    const io::ConfigNode item = conditions.at(i);
-    if (item.get_choice("enforce", {"soft", "hard"}, "soft") != "hard") continue;
-    item.require("weight", !item.has("weight"),
-                 "a hard condition (enforce: hard) is no loss term and takes no weight");
-    const bool initial = item.has("on") && !item.has_list("on") &&
-                         io::to_lower(item.get<std::string>("on")) == "initial";
-    const auto values = channel_expressions(item, "value", domain, output_dim, constants);
-    if (initial) {
-      if (!domain.has_time()) throw item.error("on", "'initial' needs a domain with a time interval");
-      const std::string type = item.get_choice("type", {"value", "velocity"});
-      auto& slot = type == "value" ? value_item : velocity_item;
-      if (slot) throw item.error("enforce", "a second hard initial " + type + " condition");
-      slot = item;
-      (type == "value" ? u0 : v0) = values;
-      if (type == "value" && item.has("time_scale"))
-        time_scale = item.get_positive<double>("time_scale");
+  for (const ConditionItem& item : items) {
+    if (!item.hard) continue;
+    const auto values = item.channel_values(domain);
+    if (item.initial) {
+      const bool value = item.type == ConditionType::kInitialValue;
+      auto& slot = value ? value_item : velocity_item;
+      if (slot) throw item.node.error("enforce", std::string("a second hard initial ") + (value ? "value" : "velocity") + " condition");
+      slot = item.node;
+      (value ? u0 : v0) = values;
+      if (value) time_scale = item.time_scale;
     } else {
-      const std::string type = item.get_choice("type", {"dirichlet", "neumann"});
-      if (type == "neumann")
-        throw item.error("enforce",
-                         "a Neumann condition cannot be hard (only dirichlet and initial "
-                         "value/velocity can); use enforce: soft");
-      const std::vector<Face> faces = condition_faces(item, domain);
       if (!dirichlet) {
         dirichlet = Ansatz::Dirichlet{{}, values};
-        dirichlet_item = item;
+        dirichlet_item = item.node;
       } else if (texts(values) != texts(dirichlet->values)) {
-        throw item.error("value", "hard Dirichlet conditions must all carry the same value (this "
-                                  "one differs from the hard one at line " +
-                                      std::to_string(dirichlet_item->mark().line + 1) +
-                                      "); make one of them soft");
+        throw item.node.error("value", "hard Dirichlet conditions must all carry the same value (this "
+                                       "one differs from the hard one at line " +
+                                           std::to_string(dirichlet_item->mark().line + 1) +
+                                           "); make one of them soft");
       }
-      for (const Face& f : faces)
+      for (const Face& f : item.faces)
         if (std::none_of(dirichlet->faces.begin(), dirichlet->faces.end(),
                          [&](const Face& g) { return g.axis == f.axis && g.upper == f.upper; }))
           dirichlet->faces.push_back(f);

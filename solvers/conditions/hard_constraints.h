@@ -150,6 +150,8 @@ void ansatz_product_rule(const StreamLayout& layout, const C* a, const C* d, con
   }
 }
 
+struct ConditionItem;
+
 class Ansatz {
  public:
   struct Dirichlet {
@@ -200,13 +202,13 @@ class Ansatz {
   std::optional<Initial> initial_;
 };
 
-// Reads the hard items of a `conditions:` list (enforce: hard); null when there are none.
-// Config errors: hard Neumann, hard velocity without a hard value, different values on hard
-// Dirichlet faces, a t-dependent hard Dirichlet value together with hard initial data,
-// incompatible initial data on hard faces. Problems that pass no `ansatz` out-parameter to
-// condition_terms reject hard items.
-std::shared_ptr<const Ansatz> read_ansatz(const io::ConfigNode& conditions, const Domain& domain,
-                                          int output_dim, const io::ExpressionConstants& constants = {});
+// The ansatz of the hard items of a `conditions:` list (read_conditions,
+// solvers/conditions/condition_list.h); null when there are none. Config errors: a second
+// hard initial value or velocity, hard velocity without a hard value, different values on
+// hard Dirichlet faces, a t-dependent hard Dirichlet value together with hard initial data,
+// incompatible initial data on hard faces.
+std::shared_ptr<const Ansatz> read_ansatz(const std::vector<ConditionItem>& items, const Domain& domain,
+                                          int output_dim);
 
 // A residual on u = A + D N: transforms the network streams before `inner` and chains its
 // adjoint back. A and D streams are precomputed for the point set it is built for.

@@ -25,6 +25,8 @@ struct GridMetrics {
   bool has_error = false;
   double rel_l2 = 0;
   double max_abs_err = 0;
+  // The same per output channel (problem.output_names() order).
+  std::vector<double> output_rel_l2, output_max_abs_err;
   double residual_rms = 0;
   // Time-dependent problems: rel_l2 of each output frame, at frame_times.
   std::vector<double> frame_rel_l2, frame_times;

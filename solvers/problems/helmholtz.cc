@@ -91,6 +91,7 @@
 #include <complex>
 #include <numbers>
 
+#include "solvers/conditions/condition_values.h"
 #include "solvers/conditions/conditions.h"
 #include "solvers/problems/problems.h"
 
@@ -220,9 +221,12 @@ class Helmholtz final : public Problem {
                      "expected divided or multiplied");
     pml_divided_ = form == "divided";
     equation.reject_unknown_keys();
-    // (condition_terms rejects the empty mapping child_or_empty gives for a missing section.)
-    if (context.root.has("conditions"))
-      conditions_ = condition_terms(context.root.child("conditions"), domain_, channels);
+    // (read_conditions rejects the empty mapping child_or_empty gives for a missing section.)
+    if (context.root.has("conditions")) {
+      ConditionReading reading;
+      reading.outputs = output_names();
+      conditions_ = condition_terms(read_conditions(context.root.child("conditions"), domain_, reading), domain_);
+    }
   }
 
   const Domain& domain() const override { return domain_; }

@@ -11,11 +11,14 @@
 //     residuals:                      # each "= 0", its own loss term
 //       - "u_t + u*u_x - nu*u_xx"     # name pde, batch interior, weight 1
 //       - {expr: "u_x + u - 1", on: [x_max], weight: 10, name: robin}   # on faces
-//   conditions:                       # as for poisson and wave (solvers/conditions/conditions.h)
-//     - {on: boundary, type: dirichlet, value: "0"}
-//     - {on: initial, type: value, value: "-sin(pi*x)"}
-//   reference:
+//   conditions:                       # by output name (solvers/conditions/condition_list.h)
+//     - {on: [x_min, x_max], type: dirichlet, value: {u: "0"}}
+//     - {on: initial, type: value, value: {u: "-sin(pi*x)"}}
+//     - {on: [x_max], type: residual, residual: "u_x + u - 1"}   # boundary_residual_2
+//   reference:                        # solvers/problems/pde_reference.h
 //     exact: {u: "sin(pi*x)*exp(-t)"} # optional, an expression per output: error metrics
+//   # or `file: data.csv` (CSV, COMSOL table, F.h5:/dataset; `columns` maps names), whose
+//   # points give rel_l2 and max_abs_err per output and over all outputs in metrics.json;
 //   # or a solution the project computes: `solution: burgers_sine, nu: nu`, the Cole–Hopf
 //   # solution of u_t + u u_x = ν u_xx from −sin πx (solvers/problems/burgers_reference.h)
 //
@@ -27,21 +30,29 @@
 // lap(u), bilap(u)); each residual asks the field for exactly the streams of the symbols it
 // reads, and its adjoint comes from ceres::Jet (solvers/problems/pde_residual.h).
 //
+// Conditions of `type: residual` are compiled exactly as residuals with `on` are (one
+// function, compile_residual); the others become loss terms in solvers/conditions/conditions.h
+// or the ansatz of solvers/conditions/hard_constraints.h.
+//
 // The constants are numbers in every expression of the config: residuals, reference.exact,
-// later constants and the conditions' values. One no expression reads is an error (a typo,
-// as an unknown key is).
+// later constants and the conditions' values and coefficients. One no expression reads is an
+// error (a typo, as an unknown key is).
 // Limits: a residual reads at most 32 symbols; hard conditions (enforce: hard) take no
 // residual of order above 2.
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
+#include <filesystem>
 #include <optional>
 
 #include "io/compiled_expression.h"
 #include "io/text.h"
 #include "solvers/conditions/condition_values.h"
+#include "solvers/conditions/condition_list.h"
 #include "solvers/conditions/conditions.h"
-#include "solvers/problems/burgers_reference.h"
+#include "solvers/conditions/hard_constraints.h"
+#include "solvers/problems/pde_reference.h"
 #include "solvers/problems/pde_residual.h"
 #include "solvers/problems/pde_streams.h"
 #include "solvers/problems/problems.h"
@@ -90,11 +101,9 @@ class Pde final : public Problem {
                      "expected a non-empty list of residual expressions (each = 0)");
     for (std::size_t i = 0; i < list.size(); ++i) residuals_.push_back(read_residual(list.at(i), i));
     equation.reject_unknown_keys();
-    if (root.has("conditions"))
-      conditions_ = condition_terms(root.child("conditions"), domain_, output_dim(), &ansatz_, constants_);
-    if (root.has("conditions")) note_condition_constants(root.child("conditions"));
+    if (root.has("conditions")) read_condition_list(root.child("conditions"));
     check_terms();
-    if (root.has("reference")) read_reference(root.child("reference"));
+    if (root.has("reference")) read_reference(root.child("reference"), context.config_dir);
     for (const auto& [name, value] : constants_)
       if (!contains(constants_used_, name))
         throw root.child("constants").error(name, "constant '" + name + "' is never used (by a residual, "
@@ -132,18 +141,26 @@ class Pde final : public Problem {
   }
 
   std::shared_ptr<const Ansatz> ansatz() const override { return ansatz_; }
-  bool has_exact() const override { return !exact_.empty() || burgers_; }
-  Eigen::MatrixXd exact(const Eigen::MatrixXd& x) const override {
-    if (burgers_) {
-      Eigen::MatrixXd xt(x.rows(), 2);
-      xt << x.col(0), x.col(domain_.time_column());
-      return burgers_sine_solution(xt, *burgers_);
+  bool has_exact() const override { return reference_.has_exact(); }
+  Eigen::MatrixXd exact(const Eigen::MatrixXd& x) const override { return reference_.exact(x); }
+
+  // reference.file: the error at its points, after every stage and in metrics.json.
+  std::optional<double> reported_error(const OutputContext& context) const override {
+    if (!reference_.has_points()) return std::nullopt;
+    return output_errors(context.values(reference_.points()), reference_.values()).all_rel_l2;
+  }
+  void write_outputs(const OutputContext& context, std::vector<std::pair<std::string, double>>& metrics) const override {
+    if (!reference_.has_points()) return;
+    const OutputErrors e = output_errors(context.values(reference_.points()), reference_.values());
+    metrics.emplace_back("rel_l2", e.all_rel_l2);
+    metrics.emplace_back("max_abs_err", e.all_max_abs);
+    for (std::size_t c = 0; outputs_.size() > 1 && c < outputs_.size(); ++c) {
+      metrics.emplace_back("rel_l2_" + outputs_[c], e.rel_l2[c]);
+      metrics.emplace_back("max_abs_err_" + outputs_[c], e.max_abs[c]);
     }
-    Eigen::MatrixXd out(x.rows(), output_dim());
-    std::vector<double> scratch;
-    for (int c = 0; c < output_dim(); ++c)
-      exact_[static_cast<std::size_t>(c)].evaluate<double>(x.rows(), x.data(), x.rows(), out.col(c).data(), scratch);
-    return out;
+    metrics.emplace_back("reference_points", static_cast<double>(reference_.points().rows()));
+    std::printf("reference.file, %ld points: rel_l2 %.3e, max_abs_err %.3e\n",
+                static_cast<long>(reference_.points().rows()), e.all_rel_l2, e.all_max_abs);
   }
 
  private:
@@ -203,20 +220,55 @@ class Pde final : public Problem {
       if (!contains(constants_used_, name)) constants_used_.push_back(name);
   }
 
-  // The constants the conditions' values read (muparser expressions, read by condition_terms).
-  void note_condition_constants(const io::ConfigNode& conditions) {
-    for (std::size_t i = 0; i < conditions.size(); ++i) {
-      const io::ConfigNode item = conditions.at(i);
-      std::vector<std::string> texts;
-      if (item.has_list("value"))
-        for (std::size_t c = 0; c < item.child("value").size(); ++c) texts.push_back(item.child("value").at(c).as<std::string>());
-      else if (item.has("value"))
-        texts.push_back(item.get<std::string>("value"));
-      for (const std::string& text : texts)
-        for (const std::string& name :
-             io::Expression(text.empty() ? "0" : text, domain_.expression_variables(), constants_).constants_used())
-          if (!contains(constants_used_, name)) constants_used_.push_back(name);
+  // `conditions`: read once (solvers/conditions/condition_list.h); the residual items
+  // compiled as the equation's residuals on faces are.
+  void read_condition_list(const io::ConfigNode& node) {
+    ConditionReading reading;
+    reading.outputs = outputs_;
+    reading.constants = constants_;
+    reading.allow_hard = reading.allow_residual = true;
+    const std::vector<ConditionItem> items = read_conditions(node, domain_, reading);
+    for (const ConditionItem& item : items) {
+      for (const auto* e : {&item.robin_a, &item.robin_b}) note_constants(*e);
+      for (const auto& e : item.values) note_constants(e);
+      if (item.type != ConditionType::kResidual) continue;
+      ResidualSpec r;
+      r.node = item.node;
+      r.weight = item.weight;
+      const std::string suffix = item.index > 0 ? "_" + std::to_string(item.index) : "";
+      r.where = item.initial ? ResidualSpec::Where::kInitial : ResidualSpec::Where::kFaces;
+      r.batch_key = item.initial ? "initial" : "boundary";
+      r.name = (item.initial ? "initial_residual" : "boundary_residual") + suffix;
+      r.faces = item.faces;
+      compile_residual(item.residual, item.node, "residual", r);
+      residuals_.push_back(std::move(r));
     }
+    ansatz_ = read_ansatz(items, domain_, output_dim());
+    conditions_ = condition_terms(items, domain_);
+  }
+
+  void note_constants(const std::optional<io::Expression>& e) {
+    if (!e) return;
+    for (const std::string& name : e->constants_used())
+      if (!contains(constants_used_, name)) constants_used_.push_back(name);
+  }
+
+  void read_reference(const io::ConfigNode& node, const std::filesystem::path& config_dir) {
+    PdeExpressions e;
+    e.compile = [this](const io::ConfigNode& parent, const std::string& key) {
+      try {
+        io::CompiledExpression compiled(parent.get<std::string>(key), scope(false));
+        note_constants(compiled);
+        return compiled;
+      } catch (const io::ExpressionError& error) {
+        throw parent.expression_error(key, error);
+      }
+    };
+    e.constant = [this](const io::ConfigNode& parent, const std::string& key) {
+      return constant_expression(parent, key,
+                                 "constants: " + (constants_.empty() ? std::string("none") : constant_names()));
+    };
+    reference_ = PdeReference(node, domain_, outputs_, e, config_dir);
   }
 
   std::string constant_names() const {
@@ -256,6 +308,14 @@ class Pde final : public Problem {
       r.name = "pde" + suffix;
       r.batch_key = "interior";
     }
+    compile_residual(text, item, item.is_map() ? std::optional<std::string>("expr") : std::nullopt, r);
+    if (item.is_map()) item.reject_unknown_keys();
+    return r;
+  }
+
+  // Compiles `text` (at node[key], or node itself) into r's expression, symbols and streams.
+  void compile_residual(const std::string& text, const io::ConfigNode& node, const std::optional<std::string>& key,
+                        ResidualSpec& r) {
     // Candidate symbols get slots d, d + 1, … as they are resolved; those the compiled
     // expression reads (an alias may have replaced some) are then renumbered from d.
     std::vector<DerivativeSymbol> candidates;
@@ -274,7 +334,7 @@ class Pde final : public Problem {
       expression = io::CompiledExpression(text, s);
       note_constants(expression);
     } catch (const io::ExpressionError& e) {
-      throw item.is_map() ? item.expression_error("expr", e) : item.expression_error(e);
+      throw key ? node.expression_error(*key, e) : node.expression_error(e);
     }
     std::vector<DerivativeSymbol> symbols;
     std::vector<int> slot(static_cast<std::size_t>(d) + candidates.size());
@@ -287,7 +347,7 @@ class Pde final : public Problem {
     expression.remap_slots(slot);
     r.expression = std::make_shared<const io::CompiledExpression>(std::move(expression));
     const auto error = [&](const std::string& message) {
-      return item.is_map() ? item.error("expr", message) : item.error(message);
+      return key ? node.error(*key, message) : node.error(message);
     };
     if (symbols.empty())
       throw error("the residual '" + text + "' reads no output (outputs: " + io::join(outputs_) +
@@ -298,8 +358,6 @@ class Pde final : public Problem {
     StreamPlan plan = plan_streams(symbols, d, domain_.space_dim());
     r.spec = std::move(plan.spec);
     r.symbols = std::make_shared<const std::vector<std::vector<SymbolTerm>>>(std::move(plan.symbols));
-    if (item.is_map()) item.reject_unknown_keys();
-    return r;
   }
 
   // u_xx + u_yy (+ u_zz) read as lap(u): one operator stream instead of two or three.
@@ -349,54 +407,6 @@ class Pde final : public Problem {
     }
   }
 
-  // `reference.exact`: an expression per output ({u: "…"}), or one string for one output.
-  void read_reference(const io::ConfigNode& node) {
-    if (node.has("solution")) return read_named_solution(node);
-    const io::ExpressionScope s = scope(false);
-    auto compile = [&](const io::ConfigNode& parent, const std::string& key) {
-      try {
-        io::CompiledExpression e(parent.get<std::string>(key), s);
-        note_constants(e);
-        return e;
-      } catch (const io::ExpressionError& e) {
-        throw parent.expression_error(key, e);
-      }
-    };
-    if (!node.has_map("exact")) {
-      node.require("exact", output_dim() == 1,
-                   "expected a mapping of output names to expressions (outputs: " + io::join(outputs_) + ")");
-      exact_.push_back(compile(node, "exact"));
-    } else {
-      const io::ConfigNode exact = node.child("exact");
-      for (const std::string& key : exact.keys())
-        if (!contains(outputs_, key))
-          throw exact.error(key, "'" + key + "' is no output (outputs: " + io::join(outputs_) + ")");
-      for (const std::string& output : outputs_) {
-        if (!exact.has(output)) throw exact.error("missing the exact solution of output '" + output + "'");
-        exact_.push_back(compile(exact, output));
-      }
-    }
-    node.reject_unknown_keys();
-  }
-
-  // `reference: {solution: burgers_sine, nu: EXPRESSION}`: on x ∈ [−1, 1] (any part of it)
-  // and t ∈ [0, 10], one output.
-  void read_named_solution(const io::ConfigNode& node) {
-    node.get_choice("solution", {"burgers_sine"});
-    node.require("solution", domain_.space_dim() == 1 && domain_.has_time() && output_dim() == 1,
-                 "burgers_sine needs one output over one space variable and time (domain: lower, upper "
-                 "of size 1 and time)");
-    node.require("solution", domain_.time().first >= 0 && domain_.time().second <= 10,
-                 "burgers_sine is computed for t in [0, 10]");
-    const double nu = constant_expression(
-        node, "nu", "constants: " + (constants_.empty() ? std::string("none") : constant_names()));
-    BurgersSineOptions options;
-    options.nu = nu;
-    node.require("nu", nu >= 1e-4 && nu <= 1e3, "expected a viscosity in [1e-4, 1e3]");
-    burgers_ = options;
-    node.reject_unknown_keys();
-  }
-
   Domain domain_;
   std::vector<std::string> outputs_;
   std::vector<std::pair<std::string, double>> constants_;
@@ -404,8 +414,7 @@ class Pde final : public Problem {
   std::vector<ResidualSpec> residuals_;
   std::vector<LossTerm> conditions_;
   std::shared_ptr<const Ansatz> ansatz_;
-  std::vector<io::CompiledExpression> exact_;
-  std::optional<BurgersSineOptions> burgers_;  // reference.solution: burgers_sine
+  PdeReference reference_;
 };
 
 }  // namespace

@@ -7,6 +7,7 @@
 //     source: "-2*pi^2*sin(pi*x)*sin(pi*y)"   # f
 //     exact: "sin(pi*x)*sin(pi*y)"            # optional: error metrics
 #include "solvers/conditions/conditions.h"
+#include "solvers/conditions/hard_constraints.h"
 #include "solvers/problems/problems.h"
 
 namespace nfield::solvers {
@@ -21,7 +22,11 @@ class Poisson final : public Problem {
     source_ = std::make_shared<io::Expression>(equation.get_expression("source", vars));
     if (equation.has("exact")) exact_ = std::make_shared<io::Expression>(equation.get_expression("exact", vars));
     equation.reject_unknown_keys();
-    conditions_ = condition_terms(context.root.child_or_empty("conditions"), domain_, 1, &ansatz_);
+    ConditionReading reading;
+    reading.allow_hard = true;
+    const std::vector<ConditionItem> items = read_conditions(context.root.child_or_empty("conditions"), domain_, reading);
+    ansatz_ = read_ansatz(items, domain_, 1);
+    conditions_ = condition_terms(items, domain_);
   }
 
   const Domain& domain() const override { return domain_; }

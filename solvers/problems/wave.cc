@@ -39,6 +39,7 @@
 #include "io/text.h"
 #include "solvers/conditions/condition_values.h"
 #include "solvers/conditions/conditions.h"
+#include "solvers/conditions/hard_constraints.h"
 #include "solvers/problems/problems.h"
 #include "solvers/problems/wave_reference.h"
 
@@ -68,9 +69,14 @@ class Wave final : public Problem {
       exact_ = std::make_shared<io::Expression>(equation.get_expression("exact", vars));
     const WaveReferenceOptions reference = reference_options(equation);
     equation.reject_unknown_keys();
-    // (condition_terms rejects the empty mapping child_or_empty gives for an absent key.)
-    if (context.root.has("conditions"))
-      conditions_ = condition_terms(context.root.child("conditions"), domain_, 1, &ansatz_);
+    // (read_conditions rejects the empty mapping child_or_empty gives for an absent key.)
+    if (context.root.has("conditions")) {
+      ConditionReading reading;
+      reading.allow_hard = true;
+      conditions_items_ = read_conditions(context.root.child("conditions"), domain_, reading);
+      ansatz_ = read_ansatz(conditions_items_, domain_, 1);
+      conditions_ = condition_terms(conditions_items_, domain_);
+    }
     if (equation.has("reference")) {
       WaveReferenceData data = reference_data(context.root, speed);
       data.source = *source_;
@@ -169,22 +175,24 @@ class Wave final : public Problem {
     data.speed = speed;
     data.faces.resize(2 * domain_.space_dim());
     bool has_value = false, has_velocity = false;
-    const io::ConfigNode conditions = root.child_or_empty("conditions");
-    for (std::size_t i = 0; conditions.is_sequence() && i < conditions.size(); ++i) {
-      const io::ConfigNode item = conditions.at(i);
-      const io::Expression value = channel_expressions(item, "value", domain_, 1).front();
-      const std::string type = io::to_lower(item.get<std::string>("type"));
-      if (!item.has_list("on") && io::to_lower(item.get<std::string>("on")) == "initial") {
-        (type == "value" ? data.initial_value : data.initial_velocity) = value;
-        (type == "value" ? has_value : has_velocity) = true;
+    for (const ConditionItem& item : conditions_items_) {
+      const bool dirichlet = item.type == ConditionType::kDirichlet;
+      if (!dirichlet && item.type != ConditionType::kNeumann && !item.initial)
+        throw item.node.error("type", "the finite-difference reference (equation.reference) takes dirichlet, "
+                                      "neumann and initial conditions only");
+      const io::Expression value = item.channel_values(domain_).front();
+      if (item.initial) {
+        const bool is_value = item.type == ConditionType::kInitialValue;
+        (is_value ? data.initial_value : data.initial_velocity) = value;
+        (is_value ? has_value : has_velocity) = true;
         continue;
       }
-      for (const Face& face : condition_faces(item, domain_)) {
+      for (const Face& face : item.faces) {
         auto& slot = data.faces[2 * face.axis + (face.upper ? 1 : 0)];
         if (slot)
-          throw item.error("on", "face " + face.name() + " has a condition already; the finite-difference "
-                                 "reference (equation.reference) needs exactly one per face");
-        slot = WaveFaceCondition{type == "dirichlet", value};
+          throw item.node.error("on", "face " + face.name() + " has a condition already; the finite-difference "
+                                      "reference (equation.reference) needs exactly one per face");
+        slot = WaveFaceCondition{dirichlet, value};
       }
     }
     for (const Face& face : domain_.faces())
@@ -203,6 +211,7 @@ class Wave final : public Problem {
   double constant_speed_ = 0;                     // when the speed is a number
   std::shared_ptr<io::Expression> speed_;         // when it varies (else null)
   std::shared_ptr<io::Expression> source_, exact_;
+  std::vector<ConditionItem> conditions_items_;
   std::vector<LossTerm> conditions_;
   std::shared_ptr<const Ansatz> ansatz_;
   std::shared_ptr<const WaveReference> reference_;  // equation.reference (else null)

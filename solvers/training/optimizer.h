@@ -128,6 +128,9 @@ struct ProblemSize {
   // Σ points × residual components over the terms, at the largest point sets the run draws.
   std::function<double()> residual_rows;
   std::function<Eigen::Index()> parameters;
+  // The first loss term whose points come in groups or carry per-point tangents (a periodic
+  // condition, a pixel's ray); empty when every term is per point.
+  std::function<std::string()> grouped_term;
 };
 
 class Optimizer {

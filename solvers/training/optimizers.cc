@@ -404,6 +404,12 @@ class LmOptimizer final : public OptimizerOf<LmOptimizer, LmStageOptions> {
     y["resample_every"] = options.resample_every;
   }
   std::string refuse(const ProblemSize& size) const override {
+    if (size.grouped_term) {
+      const std::string grouped = size.grouped_term();
+      if (!grouped.empty())
+        return "loss term '" + grouped + "' reads groups of points or per-point tangents; Levenberg-Marquardt "
+               "takes per-point residuals at shared tangents only (use adam or lbfgs)";
+    }
     const std::string too_large = lm_jacobian_too_large(size.residual_rows(), size.parameters());
     return too_large.empty() ? too_large : "an lm stage here would need a Jacobian of " + too_large;
   }

@@ -95,6 +95,13 @@ std::string location(const BadConfig& c) {
   return std::to_string(line + 1) + ":" + std::to_string(column + 1);
 }
 
+// `text` (kBase or an edit of it) as a `problem: pde` config: the same equation as a residual.
+std::string pde(const std::string& text) {
+  std::string out = edit("problem: poisson", "problem: pde", text);
+  return edit("  source: \"-2*pi^2*sin(pi*x)*sin(pi*y)\"\n  exact: \"sin(pi*x)*sin(pi*y)\"\n",
+              "  residuals: [\"lap(u) + 2*pi^2*sin(pi*x)*sin(pi*y)\"]\n", out);
+}
+
 std::vector<BadConfig> bad_configs() {
   const std::string base = kBase;
   return {
@@ -199,6 +206,13 @@ std::vector<BadConfig> bad_configs() {
        {"expected a face name"}},
       {"InitialWithoutTime", edit("on: boundary, type: dirichlet", "on: initial, type: value"),
        "on: |initial", "conditions[0].on", {"'initial' needs a domain with a time interval"}},
+      // problem: pde: conditions by name and reference.file.
+      {"PdeConditionUnknownOutput", pde(edit("value: \"0\"}", "value: {w: \"0\"}}")), "{w: |\"0\"}",
+       "conditions[0].value.w", {"'w' is no output (outputs: u)"}},
+      {"PdePeriodicNotOpposite", pde(edit("type: dirichlet, value: \"0\"", "type: periodic")),
+       "on: |boundary", "conditions[0].on", {"a periodic condition pairs two opposite faces of one axis"}},
+      {"PdeReferenceFileMissing", pde(base) + "reference: {file: missing.csv}\n", "file: |missing.csv",
+       "reference.file", {"missing.csv: no such file"}},
       // YAML itself.
       {"YamlSyntax", edit("lower: [0, 0]", "lower: [0, 0"), "  upper|: [1, 1]", "",
        {"YAML syntax error"}},

@@ -14,6 +14,7 @@
 #include <string>
 
 #include "io/vtk_image.h"
+#include "solvers/conditions/condition_values.h"
 #include "solvers/conditions/conditions.h"
 #include "solvers/conditions/hard_constraints.h"
 #include "solvers/run.h"

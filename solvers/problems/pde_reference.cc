@@ -1,0 +1,210 @@
+// SPDX-License-Identifier: MIT
+#include "solvers/problems/pde_reference.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "io/point_table.h"
+#include "io/text.h"
+
+namespace nfield::solvers {
+
+namespace {
+
+bool contains(const std::vector<std::string>& names, const std::string& name) {
+  return std::find(names.begin(), names.end(), name) != names.end();
+}
+
+}  // namespace
+
+PdeReference::PdeReference(const io::ConfigNode& node, const Domain& domain, const std::vector<std::string>& outputs,
+                           const PdeExpressions& expressions, const std::filesystem::path& config_dir)
+    : domain_(domain) {
+  const int given = (node.has("exact") ? 1 : 0) + (node.has("solution") ? 1 : 0) + (node.has("file") ? 1 : 0);
+  node.require(given == 1, "expected one of exact, solution, file");
+  if (node.has("solution"))
+    read_named_solution(node, static_cast<int>(outputs.size()), expressions);
+  else if (node.has("file"))
+    read_file(node, outputs, config_dir);
+  else
+    read_exact(node, outputs, expressions);
+  node.reject_unknown_keys();
+}
+
+Eigen::MatrixXd PdeReference::exact(const Eigen::MatrixXd& x) const {
+  if (burgers_) {
+    Eigen::MatrixXd xt(x.rows(), 2);
+    xt << x.col(0), x.col(domain_.time_column());
+    return burgers_sine_solution(xt, *burgers_);
+  }
+  Eigen::MatrixXd out(x.rows(), static_cast<Eigen::Index>(exact_.size()));
+  std::vector<double> scratch;
+  for (Eigen::Index c = 0; c < out.cols(); ++c)
+    exact_[static_cast<std::size_t>(c)].evaluate<double>(x.rows(), x.data(), x.rows(), out.col(c).data(), scratch);
+  return out;
+}
+
+// `exact`: an expression per output ({u: "…"}), or one string for one output.
+void PdeReference::read_exact(const io::ConfigNode& node, const std::vector<std::string>& outputs,
+                              const PdeExpressions& e) {
+  if (!node.has_map("exact")) {
+    node.require("exact", outputs.size() == 1,
+                 "expected a mapping of output names to expressions (outputs: " + io::join(outputs) + ")");
+    exact_.push_back(e.compile(node, "exact"));
+    return;
+  }
+  const io::ConfigNode exact = node.child("exact");
+  for (const std::string& key : exact.keys())
+    if (!contains(outputs, key))
+      throw exact.error(key, "'" + key + "' is no output (outputs: " + io::join(outputs) + ")");
+  for (const std::string& output : outputs) {
+    if (!exact.has(output)) throw exact.error("missing the exact solution of output '" + output + "'");
+    exact_.push_back(e.compile(exact, output));
+  }
+}
+
+// `solution: burgers_sine, nu: EXPRESSION`: on x ∈ [−1, 1] (any part of it) and t ∈ [0, 10],
+// one output.
+void PdeReference::read_named_solution(const io::ConfigNode& node, int outputs, const PdeExpressions& e) {
+  node.get_choice("solution", {"burgers_sine"});
+  node.require("solution", domain_.space_dim() == 1 && domain_.has_time() && outputs == 1,
+               "burgers_sine needs one output over one space variable and time (domain: lower, upper "
+               "of size 1 and time)");
+  node.require("solution", domain_.time().first >= 0 && domain_.time().second <= 10,
+               "burgers_sine is computed for t in [0, 10]");
+  const double nu = e.constant(node, "nu");
+  node.require("nu", nu >= 1e-4 && nu <= 1e3, "expected a viscosity in [1e-4, 1e3]");
+  BurgersSineOptions options;
+  options.nu = nu;
+  burgers_ = options;
+}
+
+// The file's column of each variable, then of each output, and where to blame a missing one.
+struct ReferenceColumns {
+  std::vector<std::pair<std::string, std::string>> column;  // name → column
+  std::optional<io::ConfigNode> columns;                     // reference.columns
+  io::ConfigNode node;                                       // reference
+
+  const std::string& of(std::size_t k) const { return column[k].second; }
+  // A missing column is the columns entry's fault where it named one, else the file's.
+  io::ConfigError located(std::size_t k, const io::TableError& e) const {
+    const std::string& name = column[k].first;
+    return columns && columns->has(name) ? columns->error(name, e.what()) : node.error("file", e.what());
+  }
+  Eigen::VectorXd read(const io::PointTable& table, std::size_t k) const {
+    try {
+      return table.column(of(k));
+    } catch (const io::TableError& e) {
+      throw located(k, e);
+    }
+  }
+};
+
+namespace {
+
+ReferenceColumns column_names(const io::ConfigNode& node, const std::vector<std::string>& variables,
+                         const std::vector<std::string>& outputs) {
+  ReferenceColumns names{{}, std::nullopt, node};
+  if (node.has("columns")) {
+    names.columns = node.child("columns");
+    names.columns->require(names.columns->is_map(), "expected a mapping of variable and output names to column names");
+    for (const std::string& key : names.columns->keys())
+      if (!contains(variables, key) && !contains(outputs, key))
+        throw names.columns->error(key, "'" + key + "' is neither a variable nor an output (variables: " +
+                                            io::join(variables) + "; outputs: " + io::join(outputs) + ")");
+  }
+  for (const auto* list : {&variables, &outputs})
+    for (const std::string& name : *list)
+      names.column.emplace_back(name, names.columns && names.columns->has(name) ? names.columns->get<std::string>(name) : name);
+  return names;
+}
+
+}  // namespace
+
+// `file` and `columns`: see the header.
+void PdeReference::read_file(const io::ConfigNode& node, const std::vector<std::string>& outputs,
+                             const std::filesystem::path& config_dir) {
+  const ReferenceColumns names = column_names(node, domain_.input_names(), outputs);
+  std::string source = node.get<std::string>("file");
+  if (std::filesystem::path(source).is_relative()) source = (config_dir / source).string();
+  io::PointTable table;
+  try {
+    table = io::read_point_table(source);
+  } catch (const io::TableError& e) {
+    throw node.error("file", e.what());
+  }
+  const int d = domain_.input_dim(), n_out = static_cast<int>(outputs.size());
+  const bool timed = domain_.has_time() && !table.has(names.of(static_cast<size_t>(domain_.time_column())));
+  const int coordinates = timed ? domain_.space_dim() : d;
+  Eigen::MatrixXd space(table.rows(), coordinates);
+  std::vector<std::string> coordinate_columns;
+  for (int a = 0; a < coordinates; ++a) {
+    space.col(a) = names.read(table, static_cast<size_t>(a));
+    coordinate_columns.push_back(table.names[static_cast<size_t>(table.index(names.of(static_cast<size_t>(a))))]);
+  }
+  std::vector<double> lower(domain_.lower()), upper(domain_.upper());
+  if (!timed && domain_.has_time()) {
+    lower.push_back(domain_.time().first);
+    upper.push_back(domain_.time().second);
+  }
+  try {
+    io::require_inside_box(table, coordinate_columns, lower, upper);
+  } catch (const io::TableError& e) {
+    throw node.error("file", e.what());
+  }
+  if (timed) return read_timed_columns(table, names, space, outputs);
+  points_ = space;
+  values_.resize(table.rows(), n_out);
+  for (int c = 0; c < n_out; ++c) values_.col(c) = names.read(table, static_cast<size_t>(d + c));
+}
+
+// COMSOL layout: one column per output and time, every output at the same times.
+void PdeReference::read_timed_columns(const io::PointTable& table, const ReferenceColumns& names,
+                                      const Eigen::MatrixXd& space, const std::vector<std::string>& outputs) {
+  const int d = domain_.input_dim(), n_out = static_cast<int>(outputs.size());
+  const auto [t0, t1] = domain_.time();
+  std::vector<std::vector<io::TimedColumn>> timed;
+  for (int c = 0; c < n_out; ++c) {
+    const std::size_t k = static_cast<size_t>(d + c);
+    timed.push_back(table.times(names.of(k)));
+    const auto& times = timed.back();
+    if (times.empty())
+      throw names.located(k, io::TableError(table.source, 0, 0,
+                                            "no column '" + names.of(static_cast<size_t>(domain_.time_column())) +
+                                                "' and no columns '" + names.of(k) + " @ t=…' (columns: " +
+                                                io::join(table.names) + ")"));
+    for (std::size_t j = 0; j < times.size(); ++j) {
+      if (times[j].time < t0 - 1e-9 * (t1 - t0) || times[j].time > t1 + 1e-9 * (t1 - t0))
+        throw names.node.error("file", table.source + ": column '" + table.names[static_cast<size_t>(times[j].index)] +
+                                           "' lies outside the domain's time interval");
+      if (c > 0 && (times.size() != timed[0].size() || times[j].time != timed[0][j].time))
+        throw names.located(k, io::TableError(table.source, 0, 0,
+                                              "output '" + outputs[static_cast<size_t>(c)] +
+                                                  "' has other times than output '" + outputs[0] + "'"));
+    }
+  }
+  const Eigen::Index rows = table.rows(), frames = static_cast<Eigen::Index>(timed[0].size());
+  points_.resize(rows * frames, d);
+  values_.resize(rows * frames, n_out);
+  for (Eigen::Index j = 0; j < frames; ++j) {
+    points_.middleRows(j * rows, rows).leftCols(space.cols()) = space;
+    points_.middleRows(j * rows, rows).col(domain_.time_column()).setConstant(timed[0][static_cast<size_t>(j)].time);
+    for (int c = 0; c < n_out; ++c)
+      values_.middleRows(j * rows, rows).col(c) = table.values.col(timed[static_cast<size_t>(c)][static_cast<size_t>(j)].index);
+  }
+}
+
+OutputErrors output_errors(const Eigen::MatrixXd& values, const Eigen::MatrixXd& reference) {
+  const auto rel = [](double error, double norm) { return norm > 0 ? error / norm : error; };
+  const Eigen::MatrixXd error = values - reference;
+  OutputErrors e;
+  for (Eigen::Index c = 0; c < error.cols(); ++c) {
+    e.rel_l2.push_back(rel(error.col(c).norm(), reference.col(c).norm()));
+    e.max_abs.push_back(error.col(c).cwiseAbs().maxCoeff<Eigen::PropagateNaN>());
+  }
+  e.all_rel_l2 = rel(error.norm(), reference.norm());
+  e.all_max_abs = error.cwiseAbs().maxCoeff<Eigen::PropagateNaN>();
+  return e;
+}
+
+}  // namespace nfield::solvers
