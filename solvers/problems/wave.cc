@@ -37,7 +37,6 @@
 #include <cstdio>
 
 #include "io/text.h"
-#include "solvers/conditions/condition_values.h"
 #include "solvers/conditions/conditions.h"
 #include "solvers/conditions/hard_constraints.h"
 #include "solvers/problems/problems.h"
