@@ -3,6 +3,7 @@
 
 #include <omp.h>
 
+#include <algorithm>
 #include <cstddef>
 #include <limits>
 #include <stdexcept>
@@ -21,6 +22,9 @@ void dgemv_(const char* trans, const int* m, const int* n, const double* alpha, 
 void dsymv_(const char* uplo, const int* n, const double* alpha, const double* a, const int* lda,
             const double* x, const int* incx, const double* beta, double* y, const int* incy,
             std::size_t);
+void dtrsm_(const char* side, const char* uplo, const char* transa, const char* diag, const int* m,
+            const int* n, const double* alpha, const double* a, const int* lda, double* b,
+            const int* ldb, std::size_t, std::size_t, std::size_t, std::size_t);
 void dpotrf_(const char* uplo, const int* n, double* a, const int* lda, int* info, std::size_t);
 void dpotrs_(const char* uplo, const int* n, const int* nrhs, const double* a, const int* lda,
              double* b, const int* ldb, int* info, std::size_t);
@@ -69,12 +73,31 @@ Eigen::VectorXd symmetric_product(const Eigen::MatrixXd& a, const Eigen::VectorX
   return y;
 }
 
+bool cholesky(Eigen::MatrixXd& m, int block) {
+  const int n = blas_int(m.rows());
+  const double one = 1, minus_one = -1;
+  for (int k = 0; k < n; k += block) {
+    const int b = std::min(block, n - k), rest = n - k - b;
+    double* diagonal = m.data() + k + static_cast<Eigen::Index>(k) * n;
+    int info = 0;
+    {
+      const BlasThreads single(1);  // a small block: threads would only wait on each other
+      dpotrf_("U", &b, diagonal, &n, &info, 1);
+    }
+    if (info != 0) return false;
+    if (rest == 0) break;
+    double* panel = diagonal + static_cast<Eigen::Index>(b) * n;  // rows k…k+b, columns k+b…
+    dtrsm_("L", "U", "T", "N", &b, &rest, &one, diagonal, &n, panel, &n, 1, 1, 1, 1);
+    dsyrk_("U", "T", &rest, &b, &minus_one, panel, &n, &one, panel + b, &n, 1, 1);
+  }
+  return true;
+}
+
 bool cholesky_solve(Eigen::MatrixXd& m, Eigen::VectorXd& b) {
   if (b.size() == 0) return true;
   const int n = blas_int(m.rows()), one = 1;
   int info = 0;
-  dpotrf_("U", &n, m.data(), &n, &info, 1);
-  if (info != 0) return false;
+  if (!cholesky(m, 256)) return false;
   dpotrs_("U", &n, &one, m.data(), &n, b.data(), &n, &info, 1);
   return info == 0;
 }

@@ -42,9 +42,15 @@ void add_transposed_product(Eigen::VectorXd& g, const double* rows, Eigen::Index
                             const double* f);
 // y = A x with A symmetric, its upper triangle stored (dsymv).
 Eigen::VectorXd symmetric_product(const Eigen::MatrixXd& a, const Eigen::VectorXd& x);
-// Solves M x = b for symmetric positive definite M (upper triangle) by Cholesky
-// (dpotrf, dpotrs): M is overwritten by its factor, b by x. False when M is not positive
-// definite to working precision (the factorisation meets a pivot <= 0), b then undefined.
+// M = UᵀU for symmetric positive definite M (upper triangle, overwritten by U), blocked by
+// columns of `block`: each diagonal block by potrf on one thread, then the panel right of it
+// by trsm and the trailing matrix by a syrk of rank `block`, on all threads. (OpenBLAS's own
+// threaded potrf synchronises its threads so often that on a busy 2-core machine it ran
+// 5–12× slower on two threads than on one; its syrk and trsm do not.) False when M is not
+// positive definite to working precision (a pivot <= 0).
+bool cholesky(Eigen::MatrixXd& m, int block = 256);
+// Solves M x = b that way (then potrs): M is overwritten by its factor, b by x (undefined
+// when false is returned).
 bool cholesky_solve(Eigen::MatrixXd& m, Eigen::VectorXd& b);
 
 }  // namespace nfield::solvers::dense

@@ -242,6 +242,42 @@ TEST(OwnLevenbergMarquardt, IteratesAreCeresDenseNormalCholeskyOnes) {
   EXPECT_NEAR(2 * lm.cost(), 2 * summary.final_cost, 1e-10 + 1e-8 * summary.final_cost);
 }
 
+// The kernels against Eigen: JᵀJ and Jᵀf from row-major rows, and the blocked Cholesky over
+// several blocks (and a last, partial one) against Eigen's LLT.
+TEST(OwnLevenbergMarquardt, DenseKernelsMatchEigen) {
+  const Eigen::Index p = 300, m = 170;
+  const RowMajor j = RowMajor::Random(m, p);
+  const Eigen::VectorXd f = Eigen::VectorXd::Random(m);
+  Eigen::MatrixXd a = Eigen::MatrixXd::Identity(p, p);  // added to
+  Eigen::VectorXd g = Eigen::VectorXd::Ones(p);
+  {
+    const dense::BlasThreads threads(2);
+    dense::add_gram(a, j.data(), m);
+    dense::add_transposed_product(g, j.data(), m, f.data());
+  }
+  const Eigen::MatrixXd expected = Eigen::MatrixXd::Identity(p, p) + j.transpose() * j;
+  const Eigen::MatrixXd upper = a.triangularView<Eigen::Upper>();
+  EXPECT_LE((upper - Eigen::MatrixXd(expected.triangularView<Eigen::Upper>())).norm(),
+            1e-12 * expected.norm());
+  EXPECT_LE((g - (Eigen::VectorXd::Ones(p) + j.transpose() * f)).norm(), 1e-12 * g.norm());
+  const Eigen::VectorXd x = Eigen::VectorXd::Random(p);
+  EXPECT_LE((dense::symmetric_product(a, x) - expected * x).norm(), 1e-12 * (expected * x).norm());
+
+  Eigen::MatrixXd factor = a;
+  ASSERT_TRUE(dense::cholesky(factor, 64));  // blocks of 64: four whole ones and 44 columns
+  const Eigen::MatrixXd u = factor.triangularView<Eigen::Upper>();
+  const Eigen::MatrixXd eigen_u = expected.llt().matrixU();
+  EXPECT_LE((u - eigen_u).norm(), 1e-11 * eigen_u.norm());
+  Eigen::VectorXd b = expected * x;
+  factor = a;
+  ASSERT_TRUE(dense::cholesky_solve(factor, b));
+  EXPECT_LE((b - x).norm(), 1e-9 * x.norm());
+  // Not positive definite: refused.
+  Eigen::MatrixXd indefinite = a;
+  indefinite(200, 200) = -1;
+  EXPECT_FALSE(dense::cholesky(indefinite, 64));
+}
+
 TEST(OwnLevenbergMarquardt, OptionsAreValidated) {
   const auto message = [](LevenbergMarquardtOptions o) {
     try {
