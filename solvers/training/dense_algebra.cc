@@ -43,7 +43,8 @@ int blas_int(Eigen::Index n) {
 
 }  // namespace
 
-BlasThreads::BlasThreads(int threads) : saved_(omp_get_max_threads()) {
+BlasThreads::BlasThreads(int threads, Eigen::Index order) : saved_(omp_get_max_threads()) {
+  if (order < kParallelOrder) threads = 1;
   if (threads > 0) omp_set_num_threads(threads);
 }
 

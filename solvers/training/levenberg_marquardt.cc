@@ -101,7 +101,7 @@ Eigen::VectorXd LevenbergMarquardt::step(double* model_decrease) {
     factor_(j, j) += std::clamp(factor_(j, j), options_.min_diagonal, options_.max_diagonal) / radius_;
   Eigen::VectorXd y = -s.cwiseProduct(g_);
   {
-    const dense::BlasThreads threads(options_.threads);
+    const dense::BlasThreads threads(options_.threads, p);
     if (!dense::cholesky_solve(factor_, y) || !y.allFinite()) return {};
   }
   Eigen::VectorXd delta = s.cwiseProduct(y);

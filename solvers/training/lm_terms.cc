@@ -129,7 +129,7 @@ double TermsNormalEquations<Scalar>::add_term(std::size_t k, Eigen::MatrixXd* jt
     }
     loss += Eigen::Map<const Eigen::VectorXd>(f, m).squaredNorm();
     if (jtj) {
-      const dense::BlasThreads threads(threads_);
+      const dense::BlasThreads threads(threads_, p);
       dense::add_gram(*jtj, rows, m);
       dense::add_transposed_product(*jtf, rows, m, f);
     }
