@@ -37,7 +37,8 @@
 // What differs from Ceres' dense normal Cholesky (the work, not the iterates: same rule,
 // same steps up to round-off): A is formed once per accepted iterate, by BLAS syrk on all the
 // training's threads, and kept for rejected steps, which then cost one Cholesky factor only
-// (Ceres re-forms JᵀJ, on one thread, for every solve); the factor is LAPACK's potrf.
+// (Ceres re-forms JᵀJ, on one thread, for every solve); the factor is blocked over LAPACK's
+// potrf and BLAS's trsm and syrk (solvers/training/dense_algebra.h).
 // Memory: two P × P matrices (A and the factor) and no m × P Jacobian beyond what the
 // problem keeps.
 #pragma once
