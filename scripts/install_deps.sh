@@ -10,7 +10,7 @@ packages=(
   libeigen3-dev libceres-dev libvtk9-dev libhdf5-dev libyaml-cpp-dev
   libgtest-dev libgmock-dev libbenchmark-dev libmuparser-dev libomp-dev libcli11-dev nlohmann-json3-dev
   python3-h5py python3-dev python3-numpy python3-pybind11 python3-scipy python3-skimage
-  libboost-dev libsndfile1-dev
+  libboost-dev libsndfile1-dev libopenblas-openmp-dev
   libopenmpi-dev openmpi-bin
 )
 if [[ "${NFIELD_WITH_TORCH:-0}" == 1 ]]; then

@@ -11,14 +11,20 @@
 //   lbfgs  draws one point set per term and minimizes the summed loss on it with Ceres'
 //          L-BFGS (ceres::GradientProblemSolver), one step per Ceres iteration.
 //   lm     draws one point set per term and minimizes the same loss as a least-squares
-//          problem with Ceres' Levenberg–Marquardt (ceres::Problem, one parameter block θ
-//          in double, one cost function per loss term whose N·C residuals are √(w/N)·r at
-//          the term's points, so Ceres' ½Σf² is half the loss). Jacobians come from the
-//          reverse pass per point (Sequential::residuals_and_jacobian), in the training
-//          scalar, converted to double. A dense linear solver (the stage's linear_solver)
-//          factors the (Σ N·C) × P Jacobian: memory and time grow as N·P and N·P², which
-//          suits small fields (P up to a few thousand) and a few thousand points. One step
-//          per Ceres iteration, a rejected step included.
+//          problem by Levenberg–Marquardt: N·C residuals √(w/N)·r per loss term at the
+//          term's points, so ½Σf² is half the loss (solvers/training/lm_terms.h). Jacobian
+//          rows come from the reverse pass per point (Sequential::residuals_and_jacobian), in
+//          the training scalar, converted to double. One step per LM iteration, a rejected
+//          step included. Two backends, with the same trust-region rule:
+//            own    (default) the normal equations JᵀJ δ = −Jᵀf damped as Ceres' LM damps them,
+//                   JᵀJ by BLAS syrk on the training's threads, solved by LAPACK's Cholesky
+//                   (solvers/training/levenberg_marquardt.h); over MPI ranks one allreduce of
+//                   JᵀJ and Jᵀf. Memory 2·P² doubles; time m·P² (+ P³/3) per accepted step.
+//            ceres  Ceres' LEVENBERG_MARQUARDT (ceres::Problem, one parameter block θ, one cost
+//                   function per loss term), its dense linear solver the stage's
+//                   linear_solver: it factors the (Σ N·C) × P Jacobian (memory and time as
+//                   N·P and N·P², on one thread); over MPI the Jacobian rows are gathered.
+//          Both suit small fields (P up to a few thousand) and a few thousand points.
 //
 // (An L-BFGS or LM stage restarts its history, and draws new points, when resumed.)
 #pragma once
@@ -57,8 +63,10 @@ struct LbfgsStageOptions {
 };
 
 struct LmStageOptions {
-  std::string linear_solver = "dense_qr";  // dense_qr | dense_normal_cholesky
-  double initial_radius = 1e4;             // Ceres' initial trust-region radius
+  std::string backend = "own";                          // own | ceres
+  // dense_normal_cholesky | dense_qr (ceres only; the config's default with backend: ceres)
+  std::string linear_solver = "dense_normal_cholesky";
+  double initial_radius = 1e4;  // the initial trust-region radius (Ceres' name and default)
   int resample_every = 0;                  // new points every k iterations (0: one set)
 
   void validate() const;
@@ -68,6 +76,11 @@ struct LmStageOptions {
 // the end of a message ("R residuals x P parameters, more than … ; use fewer points …");
 // empty when it fits. The lm stage refuses to start such a problem, load_run such a config.
 std::string lm_jacobian_too_large(double rows, Eigen::Index parameters);
+// The own backend's limit: P² entries of JᵀJ indexed by BLAS's int ("P x P (parameters), …").
+std::string lm_normal_equations_too_large(Eigen::Index parameters);
+
+// The lm stage's optimizer (solvers/training/lm_optimizer.cc).
+std::unique_ptr<Optimizer> make_lm_optimizer();
 
 void register_optimizers(Registry<OptimizerFactory>& registry);
 
