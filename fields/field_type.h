@@ -59,6 +59,17 @@ class FieldType {
   virtual InitialBounds initial_bounds(const FieldOptions& options, int index, Eigen::Index in,
                                        Eigen::Index out) const;
 
+  // Scales: a field with several outputs of the same quantity at different scales (bacon,
+  // fields/bacon.h) has a network of output_scales() · output_dim outputs, scale 0 first;
+  // fields::Field shows problems output_scale()'s, and its loss is that scale's, or the sum
+  // over every scale's when trains_all_scales() (fields/field.h).
+  virtual int output_scales(const FieldOptions&) const { return 1; }
+  virtual int output_scale(const FieldOptions&) const { return 0; }
+  virtual bool trains_all_scales(const FieldOptions&) const { return false; }
+  // Per scale and input axis, the band limit in cycles per unit (scales × input_dim); empty
+  // when the type has none.
+  virtual Eigen::MatrixXd scale_cutoffs(const FieldOptions&) const { return {}; }
+
   // Reads the type's keys of `field:` (`type`, `hidden`, `activation` and the keys every
   // field has are read elsewhere); errors are io::ConfigError at the key.
   virtual void read(const io::ConfigNode&, FieldOptions&) const {}
