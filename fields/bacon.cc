@@ -112,6 +112,7 @@ void BaconOptions::validate(int layers) const {
   if (heads.back() != layers - 1)
     reject("output_layers", list(heads), "the last scale must read the last layer (" +
                                              std::to_string(layers - 1) + "): later layers would be unused");
+  if (period < 1 || period > 64) reject("period", std::to_string(period), "must be in [1, 64] (box widths)");
   if (output_scale < -1 || output_scale >= scales())
     reject("output_scale", std::to_string(output_scale),
            "must be a scale in 0 … " + std::to_string(scales() - 1) + " (or -1: the finest)");
@@ -122,7 +123,7 @@ Eigen::VectorXd bacon_periods(const FieldOptions& o) {
   for (int k = 0; k < o.input_dim; ++k) {
     const bool set = static_cast<int>(o.encoding.lower.size()) == o.input_dim &&
                      static_cast<int>(o.encoding.upper.size()) == o.input_dim;
-    period(k) = set ? o.encoding.upper[k] - o.encoding.lower[k] : 2.0;
+    period(k) = (set ? o.encoding.upper[k] - o.encoding.lower[k] : 2.0) * bacon_options(o).period;
   }
   return period;
 }
@@ -135,7 +136,7 @@ Eigen::MatrixXi bacon_cutoff_steps(const FieldOptions& o) {
     for (int k = 0; k < o.input_dim; ++k)
       steps(s, k) = b.resolution.empty()
                         ? static_cast<int>(std::floor(b.max_frequency[s] * period(k) * (1 + 1e-12)))
-                        : b.resolution[s] / 2;
+                        : b.period * b.resolution[s] / 2;
   return steps;
 }
 

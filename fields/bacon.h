@@ -26,9 +26,13 @@
 // and every head is periodic with period D_k along axis k (a sum of sinusoids of whole
 // periods over the box), so a signal sampled on a periodic grid of the box is represented
 // without a seam, and the band limit is a statement about the Fourier series on the box.
+// `period` p > 1 makes the period p·D_k instead (lattice 2π/(p D_k)): the box is then a part
+// of one period, so a field on it need not be periodic over the box (a PDE solution such as
+// sin(πx) on [0, 1], half a period over the box, is out of reach with p = 1); the cut-offs
+// in cycles per unit stay as given, in p times as many lattice steps.
 // Scale s has a cut-off F_s in cycles per unit of the domain, `max_frequency`, or the
 // Nyquist limit of `resolution` N samples across each axis, F = N/(2 D_k); in lattice steps
-// K_{s,k} = ⌊F_s D_k⌋ (N/2 for a resolution). The layers 0 … l₀ share K₀ (their bounds
+// K_{s,k} = ⌊F_s p D_k⌋ (p N/2 for a resolution). The layers 0 … l₀ share K₀ (their bounds
 // M_{j,k}, integers, differ by at most one and sum to K₀), layers l₀ + 1 … l₁ share
 // K₁ − K₀, and so on, so Σ_{j ≤ l_s} M_{j,k} = K_{s,k} exactly. Layers after the last head
 // are not allowed (they would only cost time).
@@ -76,6 +80,7 @@ struct BaconOptions {
   bool train_all_scales = true;       // the loss sums over every scale (BACON); else only
                                       // output_scale's
   int output_scale = -1;              // what outputs, metrics and problems see; −1: the finest
+  int period = 1;                     // the filters' period along each axis, in box widths
 
   int scales() const {
     return static_cast<int>(resolution.empty() ? max_frequency.size() : resolution.size());
@@ -92,7 +97,7 @@ const BaconOptions& bacon_options(const FieldOptions& options);
 
 // Per axis k, the lattice steps K_{s,k} of each scale's cut-off (above): scales × d.
 Eigen::MatrixXi bacon_cutoff_steps(const FieldOptions& options);
-// Per axis, the period D_k of the box.
+// Per axis, the period p D_k of the filters.
 Eigen::VectorXd bacon_periods(const FieldOptions& options);
 // The bounds M_{j,k} of each filter layer: layers × d, Σ_{j ≤ l_s} M_j = K_s.
 Eigen::MatrixXi bacon_layer_bounds(const FieldOptions& options);

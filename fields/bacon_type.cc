@@ -10,6 +10,7 @@
 //     output_layers: [2, 3, 4]            # the layer each scale reads (default: the last ones)
 //     train_scales: all                   # all (sum of the scales' losses) | output
 //     output_scale: -1                    # the scale problems and outputs see (-1: finest)
+//     period: 1                           # the filters' period, in box widths
 #include <any>
 #include <span>
 #include <stdexcept>
@@ -83,6 +84,7 @@ class BaconType final : public FieldTypeOf<BaconType> {
     }
     b.train_all_scales = node.get_choice("train_scales", {"all", "output"}, "all") == "all";
     b.output_scale = node.has("output_scale") ? node.get_in_range("output_scale", -1, b.scales() - 1) : -1;
+    b.period = node.has("period") ? node.get_in_range("period", 1, 64) : 1;
     o.extension = b;
   }
   void write(const FieldOptions& o, YAML::Node& n) const override {
@@ -94,6 +96,7 @@ class BaconType final : public FieldTypeOf<BaconType> {
     n["output_layers"] = b.head_layers(static_cast<int>(o.hidden.size()));
     n["train_scales"] = b.train_all_scales ? "all" : "output";
     n["output_scale"] = b.output_scale;
+    n["period"] = b.period;
   }
   void save(io::H5Writer& file, const std::string& group, const FieldOptions& o) const override {
     const BaconOptions& b = bacon_options(o);
@@ -106,6 +109,7 @@ class BaconType final : public FieldTypeOf<BaconType> {
     file.write_attribute(group, "bacon_output_layers", std::span<const std::int64_t>(layers));
     file.write_attribute(group, "bacon_train_all_scales", static_cast<std::int64_t>(b.train_all_scales));
     file.write_attribute(group, "bacon_output_scale", static_cast<std::int64_t>(b.output_scale));
+    file.write_attribute(group, "bacon_period", static_cast<std::int64_t>(b.period));
   }
   void load(const io::H5Reader& file, const std::string& group, FieldOptions& o) const override {
     BaconOptions b;
@@ -120,6 +124,7 @@ class BaconType final : public FieldTypeOf<BaconType> {
     b.output_layers.assign(layers.begin(), layers.end());
     b.train_all_scales = file.read_attribute<std::int64_t>(group, "bacon_train_all_scales") != 0;
     b.output_scale = static_cast<int>(file.read_attribute<std::int64_t>(group, "bacon_output_scale"));
+    b.period = static_cast<int>(file.read_attribute<std::int64_t>(group, "bacon_period"));
     o.extension = b;
   }
 };

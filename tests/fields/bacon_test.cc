@@ -134,6 +134,13 @@ TEST(Bacon, RandomNetworksAreBandLimited) {
     expect_band_limited(field1, 512, 0.0, 3.0, "1-D seed " + std::to_string(seed));
     const Field<double> field2(bacon(2, {16, 16, 16}, {1.5, 3.0, 6.0}, seed));
     expect_band_limited(field2, 64, -1.0, 1.0, "2-D seed " + std::to_string(seed));
+    // period: 2 box widths; the grid covers the whole period [0, 2).
+    FieldOptions o = bacon(1, {16, 16}, {2.0, 5.0}, seed, 0.0, 1.0);
+    BaconOptions b = bacon_options(o);
+    b.period = 2;
+    o.extension = b;
+    EXPECT_EQ(bacon_cutoff_steps(o)(1, 0), 10);
+    expect_band_limited(Field<double>(o), 256, 0.0, 2.0, "1-D period 2 seed " + std::to_string(seed));
   }
 }
 
@@ -269,13 +276,14 @@ TEST(Bacon, ConfigKeysAndLocatedErrors) {
   expect_error_at("{type: bacon, hidden: [8, 8, 8], resolution: [4, 8], output_layers: [1]}", "field.output_layers");
   expect_error_at("{type: bacon, hidden: [8, 8], resolution: [4, 8], train_scales: some}", "field.train_scales");
   expect_error_at("{type: bacon, hidden: [8, 8], resolution: [4, 8], output_scale: 2}", "field.output_scale");
+  expect_error_at("{type: bacon, hidden: [8, 8], resolution: [4, 8], period: 0}", "field.period");
   expect_error_at("{type: bacon, hidden: [8, 8], resolution: [4, 8], output_sclae: 1}", "field.output_sclae");
   expect_error_at("{type: bacon, hidden: [8, 8], resolution: [4, 8], activation: relu}", "field.activation");
   expect_error_at("{type: bacon, hidden: [8, 8], resolution: [4, 8], encoding: {type: fourier}}", "field");
 }
 
 TEST(Bacon, CheckpointRoundTrip) {
-  FieldOptions o = from_text("{type: bacon, hidden: [8, 6, 4], max_frequency: [1.5, 3], output_scale: 0}");
+  FieldOptions o = from_text("{type: bacon, hidden: [8, 6, 4], max_frequency: [1.5, 3], output_scale: 0, period: 3}");
   o.encoding.lower = {0.0, -1.0};
   o.encoding.upper = {2.0, 3.0};
   Field<float> field(o);
@@ -291,6 +299,7 @@ TEST(Bacon, CheckpointRoundTrip) {
   EXPECT_EQ(loaded.parameters(), field.parameters());
   EXPECT_EQ(loaded.scales(), 2);
   EXPECT_EQ(loaded.output_scale(), 0);
+  EXPECT_EQ(bacon_options(loaded.options()).period, 3);
   const Eigen::MatrixXf x = Eigen::MatrixXf::Random(5, 2);
   for (int s = 0; s < 2; ++s) EXPECT_EQ(loaded.values(x, s), field.values(x, s));
 }
