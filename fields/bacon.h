@@ -57,7 +57,9 @@
 // Parameters, in order: per layer i, for i ≥ 1 Wᵢ (hᵢ × hᵢ₋₁, column-major) and bᵢ, then φᵢ
 // (layer 0: φ₀ only); then per head s, H_s (m × h_{l_s}, column-major) and c_s. The module's
 // output is the S heads side by side, S·m columns, scale 0 first; fields::Field shows the
-// problems one scale of them (fields/field.h).
+// problems one scale of them (fields/field.h). A checkpoint keeps this vector as
+// /field/encoding_parameters (fields/field_io.h keeps every non-dense module's parameters
+// there) and the keys as bacon_* attributes; the filter frequencies are rebuilt from the seed.
 #pragma once
 
 #include <cstdint>
