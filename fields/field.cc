@@ -5,6 +5,7 @@
 #include <cmath>
 #include <random>
 #include <stdexcept>
+#include <string>
 
 #include "autodiff/on_columns.h"
 #include "fields/field_type.h"
@@ -16,6 +17,78 @@ namespace {
 double uniform(std::mt19937_64& rng, double a) {
   return a * (2.0 * static_cast<double>(rng() >> 11) * 0x1.0p-53 - 1.0);
 }
+
+// Keeps scale `scale`'s m columns of a network's outputs (all of them when there is one scale).
+template <typename Scalar>
+void keep_scale(int scale, Eigen::Index m, int scales, autodiff::Streams<Scalar>& out) {
+  if (scales == 1) return;
+  if (scale < 0 || scale >= scales)
+    throw std::out_of_range("field scale " + std::to_string(scale) + " of " + std::to_string(scales));
+  autodiff::Matrix<Scalar> kept = out.data.middleCols(scale * m, m);
+  out.data = std::move(kept);
+}
+
+// The columns of scale s of a multiscale output, as Streams of their own.
+template <typename Scalar>
+void slice_scale(const autodiff::Streams<Scalar>& out, int s, Eigen::Index m, autodiff::Streams<Scalar>& part) {
+  part.resize(out.points, out.count, m);
+  part.data = out.data.middleCols(s * m, m);
+}
+
+// A loss over one scale's outputs applied to scales [first, last) in turn and summed.
+template <typename Scalar>
+class ScaleLoss final : public autodiff::StreamLoss<Scalar> {
+ public:
+  ScaleLoss(const autodiff::StreamLoss<Scalar>& inner, Eigen::Index m, int first, int last)
+      : inner_(inner), m_(m), first_(first), last_(last) {}
+  double evaluate(Eigen::Index first_point, const autodiff::StreamLayout& layout,
+                  const autodiff::Streams<Scalar>& out, autodiff::Streams<Scalar>& adjoint) const override {
+    double sum = 0;
+    autodiff::Streams<Scalar> part, part_adjoint;
+    for (int s = first_; s < last_; ++s) {
+      slice_scale(out, s, m_, part);
+      part_adjoint.resize(out.points, out.count, m_);
+      part_adjoint.data.setZero();
+      sum += inner_.evaluate(first_point, layout, part, part_adjoint);
+      adjoint.data.middleCols(s * m_, m_) += part_adjoint.data;
+    }
+    return sum;
+  }
+
+ private:
+  const autodiff::StreamLoss<Scalar>& inner_;
+  Eigen::Index m_;
+  int first_, last_;
+};
+
+// A residual read from one scale's outputs.
+template <typename Scalar>
+class ScaleResidual final : public autodiff::StreamResidual<Scalar> {
+ public:
+  ScaleResidual(const autodiff::StreamResidual<Scalar>& inner, Eigen::Index m, int scale)
+      : inner_(inner), m_(m), scale_(scale) {}
+  int components() const override { return inner_.components(); }
+  void evaluate(Eigen::Index first, const autodiff::StreamLayout& layout, const autodiff::Streams<Scalar>& out,
+                autodiff::Matrix<Scalar>& r) const override {
+    autodiff::Streams<Scalar> part;
+    slice_scale(out, scale_, m_, part);
+    inner_.evaluate(first, layout, part, r);
+  }
+  void backward(Eigen::Index first, const autodiff::StreamLayout& layout, const autodiff::Streams<Scalar>& out,
+                const autodiff::Matrix<Scalar>& r_bar, autodiff::Streams<Scalar>& adjoint) const override {
+    autodiff::Streams<Scalar> part, part_adjoint;
+    slice_scale(out, scale_, m_, part);
+    part_adjoint.resize(out.points, out.count, m_);
+    part_adjoint.data.setZero();
+    inner_.backward(first, layout, part, r_bar, part_adjoint);
+    adjoint.data.middleCols(scale_ * m_, m_) += part_adjoint.data;
+  }
+
+ private:
+  const autodiff::StreamResidual<Scalar>& inner_;
+  Eigen::Index m_;
+  int scale_;
+};
 
 }  // namespace
 
@@ -33,6 +106,9 @@ Field<Scalar>::Field(FieldOptions options, autodiff::SequentialOptions evaluatio
   options_.validate();
   encoding_matrix_ = fields::encoding_matrix(options_.encoding, type.encoded_inputs(options_));
   late_features_ = type.append_modules(options_, network_);
+  scales_ = type.output_scales(options_);
+  output_scale_ = type.output_scale(options_);
+  all_scales_ = scales_ > 1 && type.trains_all_scales(options_);
   parameters_.setZero(network_.parameter_count());
   initialize();
 }
@@ -67,11 +143,49 @@ void Field<Scalar>::begin_stage(int stage) {
 }
 
 template <typename Scalar>
-autodiff::Matrix<Scalar> Field<Scalar>::values(
-    const Eigen::Ref<const autodiff::Matrix<Scalar>>& x) const {
+void Field<Scalar>::evaluate_scale(int scale, const autodiff::StreamLayout& layout,
+                                   const Eigen::Ref<const autodiff::Matrix<Scalar>>& x,
+                                   autodiff::Streams<Scalar>& out) const {
+  network_.evaluate(parameters_.data(), layout, x, out);
+  keep_scale(scale, options_.output_dim, scales_, out);
+}
+
+template <typename Scalar>
+void Field<Scalar>::evaluate(const Scalar* theta, const autodiff::StreamLayout& layout,
+                             const autodiff::Batch<Scalar>& batch, autodiff::Streams<Scalar>& out) const {
+  network_.evaluate(theta, layout, batch, out);
+  keep_scale(output_scale_, options_.output_dim, scales_, out);
+}
+
+template <typename Scalar>
+double Field<Scalar>::value_and_gradient(const Scalar* theta, const autodiff::StreamLayout& layout,
+                                         const autodiff::Batch<Scalar>& batch,
+                                         const autodiff::StreamLoss<Scalar>& loss, Scalar* gradient) const {
+  if (scales_ == 1) return network_.value_and_gradient(theta, layout, batch, loss, gradient);
+  const ScaleLoss<Scalar> scaled(loss, options_.output_dim, all_scales_ ? 0 : output_scale_,
+                                 all_scales_ ? scales_ : output_scale_ + 1);
+  return network_.value_and_gradient(theta, layout, batch, scaled, gradient);
+}
+
+template <typename Scalar>
+void Field<Scalar>::residuals_and_jacobian(const Scalar* theta, const autodiff::StreamLayout& layout,
+                                           const autodiff::Batch<Scalar>& batch,
+                                           const autodiff::StreamResidual<Scalar>& residual,
+                                           Scalar* residuals, Scalar* jacobian) const {
+  if (scales_ == 1) {
+    network_.residuals_and_jacobian(theta, layout, batch, residual, residuals, jacobian);
+    return;
+  }
+  const ScaleResidual<Scalar> scaled(residual, options_.output_dim, output_scale_);
+  network_.residuals_and_jacobian(theta, layout, batch, scaled, residuals, jacobian);
+}
+
+template <typename Scalar>
+autodiff::Matrix<Scalar> Field<Scalar>::values(const Eigen::Ref<const autodiff::Matrix<Scalar>>& x,
+                                               int scale) const {
   const autodiff::StreamLayout layout(autodiff::StreamSpec::values(options_.input_dim));
   autodiff::Streams<Scalar> out;
-  evaluate(layout, x, out);
+  evaluate_scale(scale, layout, x, out);
   return out.data;
 }
 

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 //
 // A field f_θ: R^d → R^m, a coordinate network with one flat parameter vector θ, built by its
-// field type (fields/field_type.h: siren, mlp, nerf, and types registered from outside).
+// field type (fields/field_type.h: siren, mlp, nerf, bacon, and types registered from outside).
 //
 // Encodings with parameters (hash_grid) draw their own initialization (Module::initialize),
 // from the same engine, before the dense layers.
@@ -50,37 +50,49 @@ class Field {
   // switched off until then (fields/encodings.h). A field nobody calls this on has them on.
   void begin_stage(int stage);
 
-  // Output streams at x (N × d), at the field's own parameters.
+  // Scales (FieldType::output_scales; fields/bacon.h): the network has scales() · output_dim()
+  // outputs, scale 0 first. Everything below shows output_scale()'s output_dim() columns, the
+  // one problems, outputs and metrics see; value_and_gradient's loss is that scale's, or,
+  // when the type trains all scales (BACON's sum of per-scale losses), the loss applied to
+  // each scale's columns in turn and summed. A problem so needs no change to train a field
+  // with several scales. residuals_and_jacobian (Levenberg–Marquardt) fits output_scale()
+  // alone: its residual count is fixed by the problem. One field type's output streams are
+  // one quantity per scale; a single-scale field (every other type) is scales() = 1 and
+  // passes straight through.
+  int scales() const { return scales_; }
+  int output_scale() const { return output_scale_; }
+  bool trains_all_scales() const { return all_scales_; }
+
+  // Output streams at x (N × d), at the field's own parameters: output_scale()'s, or `scale`'s.
   void evaluate(const autodiff::StreamLayout& layout, const Eigen::Ref<const autodiff::Matrix<Scalar>>& x,
                 autodiff::Streams<Scalar>& out) const {
-    network_.evaluate(parameters_.data(), layout, x, out);
+    evaluate_scale(output_scale_, layout, x, out);
   }
+  void evaluate_scale(int scale, const autodiff::StreamLayout& layout,
+                      const Eigen::Ref<const autodiff::Matrix<Scalar>>& x, autodiff::Streams<Scalar>& out) const;
 
   // The passes a trainer runs, at parameters θ (parameter_count() values), over a batch of
   // points with optional per-point tangents and groups (autodiff/sequential.h).
   void evaluate(const Scalar* theta, const autodiff::StreamLayout& layout,
-                const autodiff::Batch<Scalar>& batch, autodiff::Streams<Scalar>& out) const {
-    network_.evaluate(theta, layout, batch, out);
-  }
+                const autodiff::Batch<Scalar>& batch, autodiff::Streams<Scalar>& out) const;
   // Σ of `loss` over the batch; adds ∂/∂θ into `gradient` (not cleared). Returns the sum.
   double value_and_gradient(const Scalar* theta, const autodiff::StreamLayout& layout,
                             const autodiff::Batch<Scalar>& batch,
-                            const autodiff::StreamLoss<Scalar>& loss, Scalar* gradient) const {
-    return network_.value_and_gradient(theta, layout, batch, loss, gradient);
-  }
+                            const autodiff::StreamLoss<Scalar>& loss, Scalar* gradient) const;
   // Per-point residuals and their Jacobian ∂r/∂θ (Sequential::residuals_and_jacobian).
   void residuals_and_jacobian(const Scalar* theta, const autodiff::StreamLayout& layout,
                               const autodiff::Batch<Scalar>& batch,
                               const autodiff::StreamResidual<Scalar>& residual,
-                              Scalar* residuals, Scalar* jacobian) const {
-    network_.residuals_and_jacobian(theta, layout, batch, residual, residuals, jacobian);
-  }
+                              Scalar* residuals, Scalar* jacobian) const;
   // Points per block and threads of every pass.
   void set_evaluation(const autodiff::SequentialOptions& evaluation) {
     network_.set_options(evaluation);
   }
-  // Values only: N × output_dim.
-  autodiff::Matrix<Scalar> values(const Eigen::Ref<const autodiff::Matrix<Scalar>>& x) const;
+  // Values only: N × output_dim (output_scale()'s, or `scale`'s).
+  autodiff::Matrix<Scalar> values(const Eigen::Ref<const autodiff::Matrix<Scalar>>& x) const {
+    return values(x, output_scale_);
+  }
+  autodiff::Matrix<Scalar> values(const Eigen::Ref<const autodiff::Matrix<Scalar>>& x, int scale) const;
 
   // The same field in another scalar type (parameters converted).
   template <typename Other>
@@ -92,6 +104,8 @@ class Field {
   autodiff::Sequential<Scalar> network_;
   autodiff::Vector<Scalar> parameters_;
   fields::FeatureEncoding<Scalar>* late_features_ = nullptr;  // in network_; set if from_stage > 0
+  int scales_ = 1, output_scale_ = 0;
+  bool all_scales_ = false;
 };
 
 }  // namespace nfield::fields

@@ -4,6 +4,7 @@
 //
 //   field:
 //     type: siren             # siren | mlp | nerf (color_hidden: [64], direction_frequencies: 4)
+//                             # | bacon (resolution: [64, 128, 256], …; fields/bacon_type.cc)
 //     hidden: [64, 64, 64]    # hidden widths
 //     first_omega: 30         # siren
 //     hidden_omega: 30        # siren (mlp with sine: its frequency)

@@ -12,6 +12,9 @@
 //          (fields/radiance_network.h); `hidden` is the trunk, `color_hidden` the colour
 //          layers, `encoding` encodes x; relu by default; weights initialized as mlp.
 //
+//   bacon  a multiplicative filter network with band-limited outputs, one per scale
+//          (fields/bacon.h; its keys: fields/bacon_type.cc).
+//
 // `hidden` lists the H hidden widths: the SIREN reference network of the paper, d → 256,
 // three 256 → 256 layers and 256 → 1, is hidden = [256, 256, 256, 256].
 // Complex-valued fields use output_dim = 2 (real, imaginary).
@@ -27,7 +30,7 @@
 namespace nfield::fields {
 
 struct FieldOptions {
-  std::string type = "siren";         // a registered field type: siren | mlp | nerf | …
+  std::string type = "siren";         // a registered field type: siren | mlp | nerf | bacon | …
   int input_dim = 2;                  // ≥ 1 (nerf: 6)
   int output_dim = 1;                 // ≥ 1
   std::vector<int> hidden{256, 256, 256, 256};

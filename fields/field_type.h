@@ -2,7 +2,7 @@
 //
 // One registered field type: everything the program does that depends on `field.type`. The
 // registry (field_type(), fields/field_types.cc) maps each name, case-insensitively, to one
-// of these; siren, mlp and nerf are registered there, and code outside the library adds its
+// of these; siren, mlp, nerf and bacon are registered there, and code outside the library adds its
 // own with register_field_type. An unknown name is an UnknownNameError listing the valid
 // names.
 #pragma once
@@ -58,6 +58,17 @@ class FieldType {
   // zero biases.
   virtual InitialBounds initial_bounds(const FieldOptions& options, int index, Eigen::Index in,
                                        Eigen::Index out) const;
+
+  // Scales: a field with several outputs of the same quantity at different scales (bacon,
+  // fields/bacon.h) has a network of output_scales() · output_dim outputs, scale 0 first;
+  // fields::Field shows problems output_scale()'s, and its loss is that scale's, or the sum
+  // over every scale's when trains_all_scales() (fields/field.h).
+  virtual int output_scales(const FieldOptions&) const { return 1; }
+  virtual int output_scale(const FieldOptions&) const { return 0; }
+  virtual bool trains_all_scales(const FieldOptions&) const { return false; }
+  // Per scale and input axis, the band limit in cycles per unit (scales × input_dim); empty
+  // when the type has none.
+  virtual Eigen::MatrixXd scale_cutoffs(const FieldOptions&) const { return {}; }
 
   // Reads the type's keys of `field:` (`type`, `hidden`, `activation` and the keys every
   // field has are read elsewhere); errors are io::ConfigError at the key.

@@ -8,6 +8,7 @@
 
 #include "fields/activation_layer.h"
 #include "fields/activations.h"
+#include "fields/bacon.h"
 #include "fields/dense.h"
 #include "fields/encoding_type.h"
 #include "fields/field_type.h"
@@ -131,6 +132,7 @@ void register_field_types(FieldTypeRegistry& registry) {
   registry.add("siren", std::make_unique<SirenType>());
   registry.add("mlp", std::make_unique<MlpType>());
   registry.add("nerf", std::make_unique<NerfType>());
+  registry.add("bacon", make_bacon_type());
 }
 
 FieldTypeRegistry& field_types() {

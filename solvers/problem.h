@@ -37,6 +37,13 @@ struct OutputContext {
   FieldStreams streams;
   // Relative rounding error of those values: the training scalar's epsilon.
   double epsilon = 2.220446049250313e-16;
+  // A field with several scales (fields/field.h, Field::scales; bacon): how many, the one
+  // `values` gives, each scale's values (n × output_dim, as `values`), and each scale's band
+  // limit per input axis in cycles per unit (scales × input_dim; empty when unknown).
+  int scales = 1;
+  int output_scale = 0;
+  std::function<Eigen::MatrixXd(const Eigen::MatrixXd&, int)> scale_values;
+  Eigen::MatrixXd scale_cutoffs;
 };
 
 // What `nfield render` asks of a problem whose field renders images: the cameras of a

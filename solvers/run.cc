@@ -16,6 +16,7 @@
 #include "fields/encoding_type.h"
 #include "fields/field_config.h"
 #include "fields/field_io.h"
+#include "fields/field_type.h"
 #include "io/atomic_write.h"
 #include "io/version.h"
 #include "solvers/output/grid_output.h"
@@ -83,6 +84,18 @@ double median(std::vector<double> v) {
   if (v.empty()) return 0;
   std::sort(v.begin(), v.end());
   return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+}
+
+// The scales of a multiscale field (fields/field.h) for outputs that write each one.
+template <typename Scalar>
+void set_scales(const fields::Field<Scalar>& field, std::shared_ptr<const Ansatz> ansatz, OutputContext& context) {
+  context.scales = field.scales();
+  context.output_scale = field.output_scale();
+  context.scale_cutoffs = fields::field_type(field.options().type).scale_cutoffs(field.options());
+  context.scale_values = [&field, ansatz](const Eigen::MatrixXd& x, int scale) {
+    Eigen::MatrixXd n = field.values(x.cast<Scalar>(), scale).template cast<double>();
+    return ansatz ? ansatz->values(x, n) : n;
+  };
 }
 
 template <typename Scalar>
@@ -161,11 +174,12 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
   // u = A + D·N, not the network N.
   const auto ansatz = setup.problem->ansatz();
   const StreamEvaluator solution = with_ansatz(evaluator(field), ansatz);
-  const OutputContext context{dir, [&field, ansatz](const Eigen::MatrixXd& x) {
-                                Eigen::MatrixXd n = field.values(x.cast<Scalar>()).template cast<double>();
-                                return ansatz ? ansatz->values(x, n) : n;
-                              },
-                              setup.output.grid, solution, std::numeric_limits<Scalar>::epsilon()};
+  OutputContext context{dir, [&field, ansatz](const Eigen::MatrixXd& x) {
+                          Eigen::MatrixXd n = field.values(x.cast<Scalar>()).template cast<double>();
+                          return ansatz ? ansatz->values(x, n) : n;
+                        },
+                        setup.output.grid, solution, std::numeric_limits<Scalar>::epsilon()};
+  set_scales(field, ansatz, context);
   setup.problem->watch_field(context.values, context.streams);
   const auto started = std::chrono::steady_clock::now();
   bool finished;
@@ -224,7 +238,7 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
 
   const GridMetrics grid =
       setup.problem->writes_grid_outputs()
-          ? write_grid_outputs(*setup.problem, solution, setup.output)
+          ? write_grid_outputs(*setup.problem, solution, setup.output, &context)
           : GridMetrics{};
   std::vector<std::pair<std::string, double>> extra;
   setup.problem->write_outputs(context, extra);
@@ -513,8 +527,10 @@ void evaluate_checkpoint(const std::filesystem::path& checkpoint, int grid_point
     throw std::runtime_error(checkpoint.string() + ": problem '" +
                              setup.root.get<std::string>("problem") +
                              "' has no grid outputs to evaluate");
+  OutputContext scales{out_dir, {}, setup.output.grid, {}};
+  set_scales(field, setup.problem->ansatz(), scales);
   const GridMetrics grid = write_grid_outputs(
-      *setup.problem, with_ansatz(evaluator(field), setup.problem->ansatz()), setup.output);
+      *setup.problem, with_ansatz(evaluator(field), setup.problem->ansatz()), setup.output, &scales);
   std::printf("wrote %s", out_dir.string().c_str());
   if (grid.has_error) std::printf(" (rel_l2 %.3e, max_abs_err %.3e)", grid.rel_l2, grid.max_abs_err);
   std::printf("\n");

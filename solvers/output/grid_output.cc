@@ -131,7 +131,7 @@ GridMetrics grid_error(const Problem& problem, const StreamEvaluator& evaluate,
 }
 
 GridMetrics write_grid_outputs(const Problem& problem, const StreamEvaluator& evaluate,
-                               const OutputOptions& output) {
+                               const OutputOptions& output, const OutputContext* scales) {
   const Domain& domain = problem.domain();
   const int d = domain.space_dim(), channels = problem.output_dim();
   const io::Grid grid = io::make_grid(domain.lower(), domain.upper(), output.grid);
@@ -165,6 +165,11 @@ GridMetrics write_grid_outputs(const Problem& problem, const StreamEvaluator& ev
       arrays["grad_" + names[c]] = as_vtk_vector(g);
     }
     if (channels == 2) arrays["abs_u"] = u.rowwise().norm();
+    if (scales && scales->scales > 1 && scales->scale_values)
+      for (int s = 0; s < scales->scales; ++s) {
+        const Eigen::MatrixXd us = scales->scale_values(x, s);
+        for (int c = 0; c < channels; ++c) arrays[names[c] + "_scale" + std::to_string(s)] = us.col(c);
+      }
     if (residual_index >= 0) {
       const LossTerm& term = terms[residual_index];
       const autodiff::StreamLayout layout(term.spec);

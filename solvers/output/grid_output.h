@@ -37,7 +37,9 @@ struct GridMetrics {
 GridMetrics grid_error(const Problem& problem, const StreamEvaluator& evaluate,
                        const OutputOptions& output);
 
+// With `scales` of a multiscale field (OutputContext::scales > 1), each scale's values are
+// written beside the output scale's: u_scale0, u_scale1, … for an output named u.
 GridMetrics write_grid_outputs(const Problem& problem, const StreamEvaluator& evaluate,
-                               const OutputOptions& output);
+                               const OutputOptions& output, const OutputContext* scales = nullptr);
 
 }  // namespace nfield::solvers

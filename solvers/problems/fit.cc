@@ -43,6 +43,10 @@
 // waveform.png (top: the clip in grey and the reconstruction in red; bottom: the error in
 // blue); video: frames/reconstruction_NNN.png and frames/error_NNN.png (one viridis range,
 // 0 to max_abs_err, for all frames). Every file is written atomically.
+// A field with several scales (field.type: bacon) is fitted as any field (its loss the sum
+// of the scales' losses, fields/field.h); an image fit then also writes each scale:
+// reconstruction_scaleS.png, psnr_full_scaleS and, at the scale's own resolution,
+// psnr_scaleS against the picture averaged to it (write_scale_outputs below).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -188,6 +192,7 @@ class Fit final : public Problem {
       io::write_png(context.dir / "reconstruction.png", picture(0));
       io::write_scalar_png(context.dir / "error.png", error_map(0), error_colours);
       std::printf("PSNR %.2f dB\n", psnr);
+      if (context.scales > 1) write_scale_outputs(context, metrics);
       return;
     }
     const fs::path dir = context.dir / "frames";
@@ -359,6 +364,47 @@ class Fit final : public Problem {
                                                                static_cast<int>(first + count - 1))));
     }
     return out;
+  }
+
+  // A multiscale field's image outputs (fields/field.h): per scale s the reconstruction at
+  // full resolution (reconstruction_scaleS.png), its PSNR against the picture
+  // (psnr_full_scaleS), and, where the scale's band limit is the Nyquist limit of a grid that
+  // divides the picture (N = 2 · cut-off · 2 samples over [-1, 1]), its PSNR at that grid's
+  // pixel centres against the picture averaged over each coarse pixel's block (psnr_scaleS,
+  // resolution_scaleS).
+  void write_scale_outputs(const OutputContext& context, std::vector<std::pair<std::string, double>>& metrics) const {
+    const Eigen::Index all = signal_.size();
+    for (int s = 0; s < context.scales; ++s) {
+      const std::string tag = "_scale" + std::to_string(s);
+      const Eigen::MatrixXf fitted =
+          context.scale_values(coordinates(Eigen::VectorXi::LinSpaced(all, 0, static_cast<int>(all - 1))), s)
+              .cwiseMax(0.0)
+              .cwiseMin(1.0)
+              .cast<float>();
+      io::write_png(context.dir / ("reconstruction" + tag + ".png"),
+                    io::Image{signal_.width, signal_.height, signal_.channels, fitted});
+      metrics.emplace_back("psnr_full" + tag, io::psnr(fitted, signal_.values));
+      if (context.scale_cutoffs.rows() <= s) continue;
+      const long nx = std::lround(4.0 * context.scale_cutoffs(s, 0)), ny = std::lround(4.0 * context.scale_cutoffs(s, 1));
+      if (nx < 1 || ny < 1 || signal_.width % nx || signal_.height % ny) continue;
+      const int fx = static_cast<int>(signal_.width / nx), fy = static_cast<int>(signal_.height / ny);
+      Eigen::MatrixXd centres(nx * ny, 2);
+      Eigen::MatrixXf truth = Eigen::MatrixXf::Zero(nx * ny, signal_.channels);
+      for (long r = 0; r < ny; ++r)
+        for (long c = 0; c < nx; ++c) {
+          centres(r * nx + c, 0) = centre(c, static_cast<int>(nx));
+          centres(r * nx + c, 1) = -centre(r, static_cast<int>(ny));
+          for (int i = 0; i < fy; ++i)
+            for (int j = 0; j < fx; ++j)
+              truth.row(r * nx + c) += signal_.values.row((r * fy + i) * signal_.width + c * fx + j);
+        }
+      truth /= static_cast<float>(fx * fy);
+      const Eigen::MatrixXf coarse = context.scale_values(centres, s).cwiseMax(0.0).cwiseMin(1.0).cast<float>();
+      const double psnr = io::psnr(coarse, truth);
+      metrics.emplace_back("psnr" + tag, psnr);
+      metrics.emplace_back("resolution" + tag, static_cast<double>(nx));
+      std::printf("scale %d: PSNR %.2f dB at %ld x %ld against the picture averaged to that grid\n", s, psnr, nx, ny);
+    }
   }
 
   void write_audio_outputs(const OutputContext& context, const Eigen::VectorXd& fitted,

@@ -632,5 +632,42 @@ TEST(FitRunTest, ShippedConfigsWriteTheirOutputsAndRefuseBadKeys) {
   expect_same_datasets(dir / "straight" / "checkpoint.h5", dir / "resumed" / "checkpoint.h5");
 }
 
+// nfield run on the shipped BACON image config, small (a 32² crop, three scales at 8², 16²
+// and 32², 40 Adam steps): the loss falls from its first step, every scale is written and
+// measured, and a bad bacon key exits 2 with one located line and writes nothing.
+TEST(FitRunTest, BaconConfigLossFallsAndWritesEveryScale) {
+  const auto dir = scratch_dir();
+  const auto run = [&](const std::string& out, int steps, std::vector<std::string> extra = {}) {
+    std::vector<std::string> args = {"run", NFIELD_SOURCE_DIR "/configs/fit_image_bacon.yaml", "--out", (dir / out).string(),
+                                     "--set", "equation.crop=32", "--set", "field.hidden=[24, 24, 24, 24, 24]",
+                                     "--set", "field.resolution=[8, 16, 32]", "--set", "training.batch.interior=1024",
+                                     "--set", "training.stages=[{optimizer: adam, steps: " + std::to_string(steps) +
+                                                  ", lr: 1.0e-2}]"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return run_nfield(args, dir, dir / "capture");
+  };
+  Outcome o = run("first", 1);
+  ASSERT_EQ(o.code, 0) << describe(o);
+  o = run("bacon", 40);
+  ASSERT_EQ(o.code, 0) << describe(o);
+  const nlohmann::json first = read_json(dir / "first" / "metrics.json"), last = read_json(dir / "bacon" / "metrics.json");
+  EXPECT_LT(last["loss"].get<double>(), 0.2 * first["loss"].get<double>());
+  for (int s = 0; s < 3; ++s) {
+    const std::string tag = "_scale" + std::to_string(s);
+    ASSERT_TRUE(last.contains("psnr" + tag)) << tag;
+    EXPECT_EQ(last["resolution" + tag].get<double>(), 8 << s) << tag;
+    EXPECT_TRUE(last.contains("psnr_full" + tag)) << tag;
+    EXPECT_TRUE(std::filesystem::exists(dir / "bacon" / ("reconstruction" + tag + ".png"))) << tag;
+  }
+  EXPECT_EQ(last["psnr_full_scale2"], last["psnr_db"]);  // the outputs are the finest scale's
+  expect_no_temporaries(dir);
+
+  o = run("bad", 1, {"--set", "field.output_layers=[0, 3, 2]"});
+  EXPECT_EQ(o.code, 2) << describe(o);
+  EXPECT_EQ(std::count(o.err.begin(), o.err.end(), '\n'), 1) << o.err;
+  EXPECT_NE(o.err.find("field.output_layers"), std::string::npos) << o.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "bad"));
+}
+
 }  // namespace
 }  // namespace nfield::apps::testing

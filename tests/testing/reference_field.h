@@ -19,6 +19,10 @@
 //              siren: σ_l = sin(ω_l ·), ω_0 = first_omega, ω_l = hidden_omega for l > 0
 //              mlp:   σ_l = `activation` (sine with frequency hidden_omega)
 //   output     z = W a + b
+//   bacon      written here from fields/bacon.h (only the fixed filter frequencies and the
+//              head layers come from fields::bacon_filter_frequencies / bacon_options):
+//              z₀ = sin(Ω₀ x + φ₀), zᵢ = sin(Ωᵢ x + φᵢ) ⊙ (Wᵢ zᵢ₋₁ + bᵢ), the chosen scale's
+//              head H z_l + c; parameters per layer [Wᵢ, bᵢ (i ≥ 1)], φᵢ, then the heads
 //
 // Activations known here are written in closed form with ceres' jet functions. An activation
 // registered later and not known here is applied through the library's own derivative
@@ -39,6 +43,7 @@
 #include <vector>
 
 #include "fields/activations.h"
+#include "fields/bacon.h"
 #include "fields/field.h"
 #include "fields/hash_grid.h"
 #include "io/text.h"
@@ -202,6 +207,11 @@ class ReferenceField {
         parameters_(std::move(parameters)),
         encoding_(std::move(encoding)) {
     siren_ = io::to_lower(options_.type) == "siren";
+    bacon_ = io::to_lower(options_.type) == "bacon";
+    if (bacon_) {
+      check_bacon_layout();
+      return;
+    }
     cusp_ = io::to_lower(options_.encoding.type) == "cusp";
     hash_ = io::to_lower(options_.encoding.type) == "hash_grid";
     integrated_ = io::to_lower(options_.encoding.type) == "integrated_positional";
@@ -273,12 +283,70 @@ class ReferenceField {
   }
 
  private:
+  // The parameter count of a bacon field's layout (above), checked against the field's.
+  void check_bacon_layout() {
+    const auto& h = options_.hidden;
+    Eigen::Index count = 0;
+    for (size_t i = 0; i < h.size(); ++i) count += (i > 0 ? h[i] * h[i - 1] + h[i] : 0) + h[i];
+    for (int l : fields::bacon_options(options_).head_layers(static_cast<int>(h.size())))
+      count += options_.output_dim * h[static_cast<size_t>(l)] + options_.output_dim;
+    if (count != parameters_.size())
+      throw std::logic_error("ReferenceField: bacon layout needs " + std::to_string(count) +
+                             " parameters, the field has " + std::to_string(parameters_.size()));
+    omega_ = fields::bacon_filter_frequencies(options_);
+  }
+
+  template <typename T>
+  std::vector<T> bacon(const std::vector<T>& x) const {
+    using std::sin;
+    const auto& h = options_.hidden;
+    const fields::BaconOptions& b = fields::bacon_options(options_);
+    const std::vector<int> heads = b.head_layers(static_cast<int>(h.size()));
+    const double* p = parameters_.data();
+    std::vector<std::vector<T>> z(h.size());
+    for (size_t i = 0; i < h.size(); ++i) {
+      std::vector<T> v;
+      if (i > 0) {
+        v.assign(h[i], constant<T>(0.0));
+        for (int r = 0; r < h[i]; ++r) {
+          T acc = constant<T>(p[h[i] * h[i - 1] + r]);
+          for (int c = 0; c < h[i - 1]; ++c) acc = acc + constant<T>(p[c * h[i] + r]) * z[i - 1][c];
+          v[r] = acc;
+        }
+        p += h[i] * h[i - 1] + h[i];
+      }
+      for (int r = 0; r < h[i]; ++r) {
+        T u = constant<T>(p[r]);
+        for (int k = 0; k < options_.input_dim; ++k) u = u + constant<T>(omega_[i](r, k)) * x[k];
+        z[i].push_back(i > 0 ? sin(u) * v[r] : sin(u));
+      }
+      p += h[i];
+    }
+    const int m = options_.output_dim;
+    for (size_t s = 0; s < heads.size(); ++s) {
+      const auto& a = z[static_cast<size_t>(heads[s])];
+      const Eigen::Index width = static_cast<Eigen::Index>(a.size());
+      if (static_cast<int>(s) == b.chosen_scale()) {
+        std::vector<T> y(m);
+        for (int r = 0; r < m; ++r) {
+          T acc = constant<T>(p[m * width + r]);
+          for (Eigen::Index c = 0; c < width; ++c) acc = acc + constant<T>(p[c * m + r]) * a[c];
+          y[r] = acc;
+        }
+        return y;
+      }
+      p += m * width + m;
+    }
+    throw std::logic_error("ReferenceField: no head for the chosen scale");
+  }
+
   template <typename T>
   std::vector<T> run(const std::vector<T>& x, std::vector<double>* pre) const {
     using std::cos;
     using std::sin;
     const int d = options_.input_dim;
     if (static_cast<int>(x.size()) != d) throw std::logic_error("ReferenceField: wrong input size");
+    if (bacon_) return bacon(x);
     std::vector<T> a;
     if (include_input_) a = x;
     if (integrated_) {
@@ -413,6 +481,8 @@ class ReferenceField {
   fields::FieldOptions options_;
   Eigen::VectorXd parameters_;
   Eigen::MatrixXd encoding_;
+  std::vector<Eigen::MatrixXd> omega_;  // bacon's filter frequencies
+  bool bacon_ = false;
   bool siren_ = true, cusp_ = false, hash_ = false, integrated_ = false, include_input_ = true;
   std::vector<fields::HashGridLevel> levels_;
   Eigen::Index table_count_ = 0;

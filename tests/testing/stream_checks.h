@@ -24,6 +24,7 @@
 
 #include "autodiff/streams.h"
 #include "fields/activations.h"
+#include "fields/bacon.h"
 #include "fields/encoding_type.h"
 #include "fields/encodings.h"
 #include "fields/field.h"
@@ -263,7 +264,7 @@ inline Eigen::MatrixXd reference_streams(const ReferenceField& ref, const Stream
 // encoding becomes a case by itself.
 
 struct NetworkCase {
-  std::string type;        // siren | mlp
+  std::string type;        // siren | mlp | bacon
   std::string activation;  // mlp's activation ("sine" for siren)
   std::string encoding;
   std::string variant = {};  // hash_grid: the interpolation, empty for smoothstep
@@ -287,6 +288,9 @@ inline std::vector<NetworkCase> registered_network_cases() {
         cases.push_back({"mlp", activation, encoding, variant});
     }
   }
+  // BACON reads the coordinates itself: identity only; its finest head, and its coarse one.
+  cases.push_back({"bacon", "sine", "identity"});
+  cases.push_back({"bacon", "sine", "identity", "coarse"});
   return cases;
 }
 
@@ -332,6 +336,13 @@ inline fields::FieldOptions small_options(const NetworkCase& c, int input_dim, i
   o.encoding.lower.assign(coordinates, -1.0);
   o.encoding.upper.assign(coordinates, 1.0);
   o.seed = seed;
+  if (c.type == "bacon") {
+    // Two scales on the box [−1, 1]^d (D = 2): 2 and 5 lattice steps, |ω| ≤ 5π per axis.
+    fields::BaconOptions b;
+    b.max_frequency = {1.0, 2.5};
+    b.output_scale = c.variant == "coarse" ? 0 : -1;
+    o.extension = b;
+  }
   return o;
 }
 
