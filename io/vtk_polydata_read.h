@@ -10,7 +10,7 @@ class vtkPolyData;
 
 namespace nfield::io {
 
-// Reads .vtp, .ply or .obj (by extension, case-insensitive) with VTK's reader, then splits
+// Reads .vtp, .ply, .obj or .stl (by extension, case-insensitive) with VTK's reader, then splits
 // polygons and strips into triangles and polylines into segments (points are unchanged).
 // Errors are std::runtime_error("<caller>: '<path>': <problem>"); `supported` lists the
 // caller's extensions for the unknown-extension message.
