@@ -9,6 +9,8 @@
 #include <stdexcept>
 #include <unordered_map>
 
+#include <Eigen/Geometry>
+
 #include <vtkNew.h>
 #include <vtkPolyData.h>
 #include <vtkSmartPointer.h>
@@ -151,7 +153,7 @@ MeshShape::MeshShape(io::TriangleMesh mesh) : mesh_(std::move(mesh)), locator_(s
   bounds_.upper = mesh_.vertices.colwise().maxCoeff().transpose();
 
   // The (y, z) buckets.
-  grid_ = std::max(1, static_cast<int>(std::sqrt(static_cast<double>(t.rows())) / 2));
+  grid_ = std::max(1, static_cast<int>(std::sqrt(static_cast<double>(t.rows()))));
   y0_ = bounds_.lower(1);
   z0_ = bounds_.lower(2);
   cell_y_ = std::max((bounds_.upper(1) - y0_) / grid_, 1e-300);
