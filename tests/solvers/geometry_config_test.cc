@@ -12,6 +12,7 @@
 #include <string>
 
 #include "io/config.h"
+#include "solvers/domain.h"
 #include "solvers/geometry/geometry_config.h"
 #include "tests/testing/scratch.h"
 
@@ -161,3 +162,39 @@ TEST(GeometryConfig, BadWhereExpressionIsLocated) {
 
 }  // namespace
 }  // namespace nfield::solvers::geometry
+
+namespace nfield::solvers {
+namespace {
+
+TEST(GeometryDomain, ADomainHoldsAGeometry) {
+  const io::ConfigNode root = io::parse_config(
+      "geometry:\n  shape: difference\n  shapes:\n    - {shape: box, name: outer, lower: [0, 0], upper: [2, 1]}\n"
+      "    - {shape: disk, name: hole, center: [1, 0.5], radius: 0.25}\n",
+      "d.yaml");
+  auto g = std::make_shared<const geometry::Geometry>(geometry::read_geometry(root.child("geometry"), "."));
+  const Domain d(g, std::pair{0.0, 3.0});
+  EXPECT_EQ(d.input_dim(), 3);
+  EXPECT_EQ(d.upper(), (std::vector<double>{2, 1}));
+  Random rng(3);
+  const Eigen::MatrixXd x = d.sample_interior(rng, 500);
+  for (Eigen::Index r = 0; r < x.rows(); ++r) {
+    EXPECT_GT(std::hypot(x(r, 0) - 1, x(r, 1) - 0.5), 0.25);
+    EXPECT_TRUE(x(r, 2) >= 0 && x(r, 2) < 3);
+  }
+  const Domain::BoundaryPoints b = d.sample_boundary(g->select({"hole"}), rng, 200);
+  for (Eigen::Index r = 0; r < 200; ++r) {
+    EXPECT_NEAR(std::hypot(b.points(r, 0) - 1, b.points(r, 1) - 0.5), 0.25, 1e-12);
+    EXPECT_EQ(b.normals(r, 2), 0);
+    EXPECT_EQ(b.parts(r), 1);
+  }
+  const Eigen::MatrixXd initial = d.sample_initial(rng, 50);
+  EXPECT_TRUE((initial.col(2).array() == 0).all());
+  const geometry::Measure m = d.space_measure();
+  EXPECT_NEAR(m.value, 2 - std::numbers::pi / 16, 4 * m.std_error);
+  EXPECT_THROW(d.sample_faces(d.faces(), rng, 10), std::logic_error);
+  EXPECT_TRUE(Domain({0, 0}, {1, 2}).space_measure().exact);
+  EXPECT_THROW(Domain({0, 0}, {1, 2}).sample_boundary({}, rng, 1), std::logic_error);
+}
+
+}  // namespace
+}  // namespace nfield::solvers
