@@ -14,14 +14,16 @@
 //
 // Inside test: the parity of the crossings of the ray from x along +x. Only triangles whose
 // (y, z) projection covers (x_y, x_z) can cross it, so the projections are binned once into a
-// uniform G × G grid of buckets over the (y, z) bounds (G ≈ √m/2 for m triangles, a few
+// uniform G × G grid of buckets over the (y, z) bounds (G ≈ √m for m triangles: a few
 // triangles per bucket on a surface), and a query tests the triangles of one bucket. This is a
 // BVH flattened to the one query that parity needs: no tree walk, no stack, O(1) to find the
-// candidates; VTK's locators answer "first hit" or "closest" (vtkCellLocator, vtkOBBTree) and
-// their all-hits line query allocates per call, and vtkSelectEnclosedPoints takes ~10 µs per
-// point. A ray through a shared edge or vertex must count once: each point-in-triangle test is
-// decided per edge by the sign of one orientation determinant computed for the edge's vertices
-// in a canonical order (lower index first), 0 counting as positive, so the two triangles of an
+// candidates. VTK's locators answer "closest" or "first hit" (vtkStaticCellLocator,
+// vtkCellLocator, vtkOBBTree); an all-hits line query fills a vtkIdList per call, and
+// vtkSelectEnclosedPoints (FiltersModeling, not linked) casts rays through an OBB tree per
+// point. Figures: docs/experiments.md (2026-11-26, geometry).
+// A ray through a shared edge or vertex must count once: each point-in-triangle test is decided
+// per edge by the sign of one orientation determinant computed for the edge's vertices in a
+// canonical order (lower index first), 0 counting as positive, so the two triangles of an
 // edge always disagree about which side the point is on and exactly one of them claims it
 // (triangles that project to a segment are skipped; the ray then meets their neighbours).
 //

@@ -89,7 +89,10 @@ TEST(GeometryMesh, InsideTestAgreesWithGridParity) {
 // 10⁵ interior points of the bunny; the time is printed (a busy shared machine: see the report
 // in docs/experiments.md), the assertion only catches an order-of-magnitude regression.
 TEST(GeometryMesh, BunnyInteriorPointsAreFast) {
+  const auto load_start = std::chrono::steady_clock::now();
   const Geometry g = mesh_geometry(kMeshes / "bunny00.ply");
+  std::cout << "bunny: read and checked in "
+            << std::chrono::duration<double>(std::chrono::steady_clock::now() - load_start).count() << " s\n";
   Random rng(5);
   const auto start = std::chrono::steady_clock::now();
   const std::clock_t cpu_start = std::clock();
