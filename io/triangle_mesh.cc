@@ -25,7 +25,7 @@ namespace nfield::io {
 namespace fs = std::filesystem;
 
 namespace {
-constexpr const char* kSupported = ".ply, .obj, .off, .vtp";
+constexpr const char* kSupported = ".ply, .obj, .off, .vtp, .stl";
 
 // Object File Format: [C][N]OFF, counts "V F E", V vertex lines "x y z [nx ny nz] [colour]",
 // F face lines "n i1 .. in [colour]" (split into a fan of triangles).

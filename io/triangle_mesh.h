@@ -13,7 +13,7 @@ struct TriangleMesh {
   Eigen::MatrixXd normals;                          // n×3 per-vertex normals, or 0×0 if none
 };
 
-// Reads .ply, .obj and .vtp (through VTK) and .off (including COFF, NOFF, CNOFF), chosen by
+// Reads .ply, .obj, .stl and .vtp (through VTK) and .off (including COFF, NOFF, CNOFF), chosen by
 // extension (case-insensitive). Polygons are split into triangles; lines and vertex cells are
 // ignored. `normals` are the file's per-vertex normals if it has them, else empty. Throws
 // std::runtime_error naming `path` when it is missing or malformed (an .off error also names

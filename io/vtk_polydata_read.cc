@@ -8,6 +8,7 @@
 #include <vtkOBJReader.h>
 #include <vtkPLYReader.h>
 #include <vtkPolyData.h>
+#include <vtkSTLReader.h>
 #include <vtkTriangleFilter.h>
 #include <vtkXMLPolyDataReader.h>
 
@@ -42,7 +43,9 @@ vtkSmartPointer<vtkPolyData> read_vtk_polydata(const fs::path& path, const std::
     return std::runtime_error(caller + ": '" + path.string() + "': " + why);
   };
   const std::string ext = lower_extension(path);
-  if (ext != ".vtp" && ext != ".ply" && ext != ".obj")
+  // STL only for callers that list it (surfaces; a point cloud has no use for its triangles).
+  const bool stl = ext == ".stl" && supported.find(".stl") != std::string::npos;
+  if (ext != ".vtp" && ext != ".ply" && ext != ".obj" && !stl)
     throw fail("unknown extension '" + ext + "' (supported: " + supported + ")");
   if (!fs::is_regular_file(path)) throw fail("no such file");
   vtkSmartPointer<vtkPolyData> data;
@@ -53,6 +56,12 @@ vtkSmartPointer<vtkPolyData> read_vtk_polydata(const fs::path& path, const std::
   } else if (ext == ".ply") {
     if (!vtkPLYReader::CanReadFile(path.c_str())) throw fail("not a PLY file");
     vtkNew<vtkPLYReader> reader;
+    data = run(reader.Get(), path, fail);
+  } else if (stl) {
+    // Merging (the default) joins the copies of a vertex that STL stores per triangle, so
+    // that a closed surface reads back closed.
+    vtkNew<vtkSTLReader> reader;
+    reader->MergingOn();
     data = run(reader.Get(), path, fail);
   } else {
     vtkNew<vtkOBJReader> reader;

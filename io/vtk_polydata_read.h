@@ -10,8 +10,9 @@ class vtkPolyData;
 
 namespace nfield::io {
 
-// Reads .vtp, .ply or .obj (by extension, case-insensitive) with VTK's reader, then splits
-// polygons and strips into triangles and polylines into segments (points are unchanged).
+// Reads .vtp, .ply, .obj or, when `supported` lists it, .stl (by extension, case-insensitive)
+// with VTK's reader, then splits polygons and strips into triangles and polylines into
+// segments (points are unchanged).
 // Errors are std::runtime_error("<caller>: '<path>': <problem>"); `supported` lists the
 // caller's extensions for the unknown-extension message.
 vtkSmartPointer<vtkPolyData> read_vtk_polydata(const std::filesystem::path& path,

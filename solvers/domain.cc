@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "io/registry.h"
+#include "solvers/geometry/geometry.h"
 
 namespace nfield::solvers {
 namespace {
@@ -22,6 +23,27 @@ Domain::Domain(std::vector<double> lower, std::vector<double> upper,
       throw std::invalid_argument("domain: upper[" + std::to_string(i) + "] must exceed lower");
   if (time_ && !(time_->second > time_->first))
     throw std::invalid_argument("domain: time interval must be increasing");
+}
+
+namespace {
+std::vector<double> geometry_corner(const std::shared_ptr<const geometry::Geometry>& g, bool upper) {
+  if (!g) throw std::invalid_argument("domain: no geometry");
+  const geometry::Bounds b = g->bounds();
+  std::vector<double> v;
+  for (int a = 0; a < g->dim(); ++a) v.push_back(upper ? b.upper(a) : b.lower(a));
+  return v;
+}
+}  // namespace
+
+Domain::Domain(std::shared_ptr<const geometry::Geometry> geometry, std::optional<std::pair<double, double>> time)
+    : Domain(geometry_corner(geometry, false), geometry_corner(geometry, true), time) {
+  geometry_ = std::move(geometry);
+}
+
+void Domain::require_box(const char* what) const {
+  if (geometry_)
+    throw std::logic_error(std::string("Domain::") + what +
+                           ": a domain with a geometry has parts, not box faces (sample_boundary)");
 }
 
 Domain Domain::from_config(const io::ConfigNode& node) {
@@ -78,12 +100,20 @@ std::vector<Face> Domain::faces() const {
 }
 
 Face Domain::face(const std::string& name) const {
+  require_box("face");
   Registry<Face> names("face");
   for (const Face& f : faces()) names.add(f.name(), f);
   return names.at(name);
 }
 
 Eigen::MatrixXd Domain::sample_interior(Random& rng, Eigen::Index n) const {
+  if (geometry_) {
+    Eigen::MatrixXd x(n, input_dim());
+    x.leftCols(space_dim()) = geometry_->sample_interior(rng, n);
+    if (has_time())
+      x.col(time_column()) = time_->first + (time_->second - time_->first) * unit_points(rng, n, 1).col(0).array();
+    return x;
+  }
   const Eigen::VectorXd lo = input_lower(), hi = input_upper();
   Eigen::MatrixXd x = unit_points(rng, n, input_dim());
   for (int c = 0; c < input_dim(); ++c) x.col(c) = lo(c) + (hi(c) - lo(c)) * x.col(c).array();
@@ -91,6 +121,7 @@ Eigen::MatrixXd Domain::sample_interior(Random& rng, Eigen::Index n) const {
 }
 
 Eigen::MatrixXd Domain::sample_face(const Face& face, Random& rng, Eigen::Index n) const {
+  require_box("sample_face");
   Eigen::MatrixXd x = sample_interior(rng, n);
   x.col(face.axis).setConstant(face.upper ? upper_[face.axis] : lower_[face.axis]);
   return x;
@@ -105,6 +136,7 @@ double Domain::face_measure(const Face& face) const {
 
 Eigen::MatrixXd Domain::sample_faces(const std::vector<Face>& faces, Random& rng,
                                      Eigen::Index n) const {
+  require_box("sample_faces");
   if (faces.empty()) throw std::invalid_argument("Domain::sample_faces: no faces");
   std::vector<double> cumulative;
   double total = 0;
@@ -133,6 +165,12 @@ Eigen::MatrixXd Domain::sample_faces(const std::vector<Face>& faces, Random& rng
 }
 
 Eigen::MatrixXd Domain::sample_initial(Random& rng, Eigen::Index n) const {
+  if (geometry_) {
+    Eigen::MatrixXd x(n, input_dim());
+    x.leftCols(space_dim()) = geometry_->sample_interior(rng, n);
+    if (has_time()) x.col(time_column()).setConstant(time_->first);
+    return x;
+  }
   if (rng.sequence() && has_time()) {
     // Only the space coordinates vary on the slice: no sequence dimension spent on t.
     Eigen::MatrixXd x(n, input_dim());
@@ -151,6 +189,26 @@ Eigen::VectorXd Domain::normal(const Face& face) const {
   Eigen::VectorXd v = Eigen::VectorXd::Zero(input_dim());
   v(face.axis) = face.upper ? 1.0 : -1.0;
   return v;
+}
+
+Domain::BoundaryPoints Domain::sample_boundary(const geometry::Selection& selection, Random& rng,
+                                               Eigen::Index n) const {
+  if (!geometry_) throw std::logic_error("Domain::sample_boundary: a box domain samples faces (sample_faces)");
+  const geometry::BoundarySample s = geometry_->sample_boundary(rng, n, selection);
+  BoundaryPoints out{Eigen::MatrixXd::Zero(n, input_dim()), Eigen::MatrixXd::Zero(n, input_dim()), s.parts};
+  out.points.leftCols(space_dim()) = s.points;
+  out.normals.leftCols(space_dim()) = s.normals;
+  if (has_time())
+    out.points.col(time_column()) =
+        time_->first + (time_->second - time_->first) * unit_points(rng, n, 1).col(0).array();
+  return out;
+}
+
+geometry::Measure Domain::space_measure() const {
+  if (geometry_) return geometry_->volume();
+  double v = 1;
+  for (int a = 0; a < space_dim(); ++a) v *= upper_[static_cast<size_t>(a)] - lower_[static_cast<size_t>(a)];
+  return {v, 0, true};
 }
 
 }  // namespace nfield::solvers

@@ -10,8 +10,18 @@
 // a low-discrepancy sequence (solvers/training/sampler.h), the unit-cube points come from it: the
 // interior uses input_dim coordinates, the initial slice the space ones, a union of faces
 // one more coordinate to pick the face (so each face gets a share ∝ its measure).
+//
+// A domain may instead hold a geometry (solvers/geometry/geometry.h: shapes, holes, meshes):
+// lower/upper are then its bounding box, interior points are uniform over the shape (and time
+// uniform, from a one-dimensional stream of its own when a sequence is attached), the boundary
+// is sampled by named part with normals (sample_boundary), and the box's faces do not exist
+// (face, sample_face and sample_faces throw std::logic_error), so that code written for boxes
+// cannot silently sample the bounding box's faces. Not read from configs yet: the conditions
+// (`on:` part names), the ansatz (φ from Geometry::distance) and the grid outputs (an inside
+// mask) must learn about it first.
 #pragma once
 
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -22,6 +32,11 @@
 #include "solvers/training/sampler.h"
 
 namespace nfield::solvers {
+namespace geometry {
+class Geometry;
+struct Selection;
+struct Measure;
+}  // namespace geometry
 
 struct Face {
   int axis = 0;        // space axis
@@ -33,6 +48,9 @@ class Domain {
  public:
   Domain(std::vector<double> lower, std::vector<double> upper,
          std::optional<std::pair<double, double>> time = std::nullopt);
+  // A domain shaped by `geometry` (2-D or 3-D), optionally times [t0, t1].
+  explicit Domain(std::shared_ptr<const geometry::Geometry> geometry,
+                  std::optional<std::pair<double, double>> time = std::nullopt);
   // Reads `domain:` {lower, upper, time}; errors name the file, line and key.
   static Domain from_config(const io::ConfigNode& node);
 
@@ -67,9 +85,24 @@ class Domain {
   // Outward unit normal of a face (space components only, input_dim long, zero in t).
   Eigen::VectorXd normal(const Face& face) const;
 
+  // ---- with a geometry ----------------------------------------------------------------
+  const geometry::Geometry* geometry() const { return geometry_.get(); }
+  // Points on the selected parts (time uniform when present), n × input_dim, with their
+  // outward unit normals (n × input_dim, 0 in t) and part ids. Throws std::logic_error
+  // without a geometry.
+  struct BoundaryPoints {
+    Eigen::MatrixXd points, normals;
+    Eigen::VectorXi parts;
+  };
+  BoundaryPoints sample_boundary(const geometry::Selection& selection, Random& rng, Eigen::Index n) const;
+  // The space measure: the box's volume (exact), or the geometry's (exact or estimated).
+  geometry::Measure space_measure() const;
+
  private:
   double face_measure(const Face& face) const;
+  void require_box(const char* what) const;
   std::vector<double> lower_, upper_;
+  std::shared_ptr<const geometry::Geometry> geometry_;
   std::optional<std::pair<double, double>> time_;
 };
 
