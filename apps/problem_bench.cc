@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: MIT
 #include "apps/problem_bench.h"
 
+#include <omp.h>
+
 #include <chrono>
 #include <cstdio>
 #include <memory>
@@ -74,7 +76,8 @@ void run_problem_bench(const ProblemBenchOptions& options) {
                           ? time_pair<double>(options, builtin_config, pde_config, overrides)
                           : time_pair<float>(options, builtin_config, pde_config, overrides);
       const double ratio = row.pde_ms / row.builtin_ms;
-      const int threads = solvers::load_run(builtin_config, overrides).training.threads;
+      int threads = solvers::load_run(builtin_config, overrides).training.threads;
+      if (threads == 0) threads = omp_get_max_threads();  // training.threads 0: all cores
       if (!options.json_only) {
         std::printf("%-14s %7ld %9s %12.2f %12.2f %7.3f\n", name.c_str(), batch, precision.c_str(), row.builtin_ms,
                     row.pde_ms, ratio);
