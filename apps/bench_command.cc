@@ -16,6 +16,7 @@
 #include "apps/autoint_bench.h"
 #include "apps/gemm_rate.h"
 #include "apps/nerf_bench.h"
+#include "apps/problem_bench.h"
 #include "fields/field.h"
 #include "solvers/training/adam.h"
 
@@ -284,8 +285,30 @@ void add_bench_command(CLI::App& app) {
   auto autoint_out = std::make_shared<std::filesystem::path>(autoint->out);
   bench->add_option("--autoint-out", *autoint_out, "--autoint: output folder, one subfolder per run")
       ->capture_default_str();
+  auto problems = std::make_shared<ProblemBenchOptions>();
+  auto problems_flag = std::make_shared<bool>(false);
+  bench->add_flag("--problems", *problems_flag,
+                  "Time a training step (loss and gradient) of built-in problem configs against their "
+                  "`problem: pde` restatements (CASE.yaml, CASE_pde.yaml) in the same run, at each --batch "
+                  "interior points (default 4096), and print the ratio")
+      ->excludes("--accuracy")
+      ->excludes("--nerf")
+      ->excludes("--autoint");
+  bench->add_option("--pde-cases", problems->cases, "--problems: the cases (CASE.yaml and CASE_pde.yaml)")
+      ->capture_default_str();
+  bench->add_option("--pde-configs", problems->configs, "--problems: folder of the cases' configs")
+      ->check(CLI::ExistingDirectory)
+      ->capture_default_str();
   bench->callback([bench, options, accuracy, accuracy_flag, no_fail, nerf, nerf_flag, autoint, autoint_flag, no_grid,
-                   autoint_out] {
+                   autoint_out, problems, problems_flag] {
+    if (*problems_flag) {
+      if (bench->count("--batch") > 0) problems->batches = options->batches;
+      problems->steps = options->steps;
+      problems->warmup = options->warmup;
+      problems->threads = options->threads;
+      problems->json_only = options->json_only;
+      return run_problem_bench(*problems);
+    }
     if (*autoint_flag) {
       autoint->with_grid = !*no_grid;
       autoint->out = *autoint_out;
