@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: MIT
-// Names in messages and lookups: case folding (registry entries, config choices, file
-// extensions, column names) and lists of names.
+// Names and numbers in messages and lookups: case folding (registry entries, config choices,
+// file extensions, column names), lists of names, numbers in their shortest form.
 #pragma once
 
+#include <sstream>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -26,6 +27,13 @@ inline std::string join(const std::vector<std::string>& names, std::string_view 
     out += name;
   }
   return out;
+}
+
+// "0", "1e-13", "0.25": an option's value in a message (std::to_string prints 1e-13 as 0.000000).
+inline std::string format_number(double value) {
+  std::ostringstream out;
+  out << value;
+  return out.str();
 }
 
 }  // namespace nfield::io

@@ -5,19 +5,13 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
-#include <sstream>
 #include <stdexcept>
 
+#include "io/text.h"
 #include "solvers/training/dense_algebra.h"
 
 namespace nfield::solvers {
 namespace {
-
-std::string text(double value) {
-  std::ostringstream out;
-  out << value;
-  return out.str();
-}
 
 [[noreturn]] void reject_option(const std::string& option, const std::string& value,
                                 const std::string& rule) {
@@ -34,15 +28,15 @@ std::string scientific(double value) {
 
 void LevenbergMarquardtOptions::validate() const {
   if (!(initial_radius >= 1e-12 && initial_radius <= 1e16))
-    reject_option("initial_radius", text(initial_radius), "must be in [1e-12, 1e16]");
+    reject_option("initial_radius", io::format_number(initial_radius), "must be in [1e-12, 1e16]");
   if (!(max_radius >= initial_radius && std::isfinite(max_radius)))
-    reject_option("max_radius", text(max_radius), "must be finite and >= initial_radius");
+    reject_option("max_radius", io::format_number(max_radius), "must be finite and >= initial_radius");
   if (!(min_radius >= 0 && min_radius < initial_radius))
-    reject_option("min_radius", text(min_radius), "must be >= 0 and < initial_radius");
+    reject_option("min_radius", io::format_number(min_radius), "must be >= 0 and < initial_radius");
   if (!(min_diagonal > 0 && min_diagonal <= max_diagonal))
-    reject_option("min_diagonal", text(min_diagonal), "must be > 0 and <= max_diagonal");
+    reject_option("min_diagonal", io::format_number(min_diagonal), "must be > 0 and <= max_diagonal");
   if (!(min_relative_decrease >= 0 && min_relative_decrease < 1))
-    reject_option("min_relative_decrease", text(min_relative_decrease), "must be in [0, 1)");
+    reject_option("min_relative_decrease", io::format_number(min_relative_decrease), "must be in [0, 1)");
   if (max_consecutive_invalid_steps < 1)
     reject_option("max_consecutive_invalid_steps", std::to_string(max_consecutive_invalid_steps),
                   "must be >= 1");

@@ -10,10 +10,10 @@
 #include <cmath>
 #include <limits>
 #include <memory>
-#include <sstream>
 #include <stdexcept>
 #include <vector>
 
+#include "io/text.h"
 #include "solvers/training/ceres_stage.h"
 #include "solvers/training/levenberg_marquardt.h"
 #include "solvers/training/lm_terms.h"
@@ -21,12 +21,6 @@
 
 namespace nfield::solvers {
 namespace {
-
-std::string text(double value) {
-  std::ostringstream out;
-  out << value;
-  return out.str();
-}
 
 [[noreturn]] void reject(const std::string& option, const std::string& value, const std::string& rule) {
   throw std::invalid_argument(option + " = " + value + ": " + rule);
@@ -254,7 +248,7 @@ void LmStageOptions::validate() const {
   if (backend == "own" && linear_solver != "dense_normal_cholesky")
     reject("lm.linear_solver", linear_solver, "backend own takes dense_normal_cholesky only");
   if (!(initial_radius >= 1e-12 && initial_radius <= 1e16))
-    reject("lm.initial_radius", text(initial_radius), "must be in [1e-12, 1e16]");
+    reject("lm.initial_radius", io::format_number(initial_radius), "must be in [1e-12, 1e16]");
   if (resample_every < 0)
     reject("lm.resample_every", std::to_string(resample_every), "must be >= 0");
 }

@@ -10,10 +10,10 @@
 #include <limits>
 #include <numbers>
 #include <optional>
-#include <sstream>
 #include <stdexcept>
 #include <type_traits>
 
+#include "io/text.h"
 #include "solvers/training/adam.h"
 #include "solvers/training/ceres_stage.h"
 
@@ -23,13 +23,6 @@ namespace {
 [[noreturn]] void reject(const std::string& option, const std::string& value,
                          const std::string& rule) {
   throw std::invalid_argument(option + " = " + value + ": " + rule);
-}
-
-// Shortest form ("0", "1e-13"): std::to_string would print both as 0.000000.
-std::string text(double value) {
-  std::ostringstream out;
-  out << value;
-  return out.str();
 }
 
 template <typename T>
@@ -130,7 +123,7 @@ class AdamOptimizer final : public OptimizerOf<AdamOptimizer, AdamStageOptions> 
       // The stage is over when its budget is spent (its steps count what was run).
       if (options.seconds > 0 && stage.seconds() >= options.seconds) {
         if (stage.step() < stage.steps())
-          stage.end_early("time_budget", "", "its " + text(options.seconds) + " s were spent");
+          stage.end_early("time_budget", "", "its " + io::format_number(options.seconds) + " s were spent");
         break;
       }
     }
@@ -267,12 +260,12 @@ class LbfgsOptimizer final : public OptimizerOf<LbfgsOptimizer, LbfgsStageOption
 }  // namespace
 
 void AdamStageOptions::validate() const {
-  if (!(lr > 0)) reject("adam.lr", text(lr), "must be > 0");
+  if (!(lr > 0)) reject("adam.lr", io::format_number(lr), "must be > 0");
   if (schedule != "constant" && schedule != "cosine" && schedule != "exponential")
     reject("adam.schedule", schedule, "must be constant, cosine or exponential");
-  if (!(lr_final > 0)) reject("adam.lr_final", text(lr_final), "must be > 0");
+  if (!(lr_final > 0)) reject("adam.lr_final", io::format_number(lr_final), "must be > 0");
   if (!(seconds >= 0 && std::isfinite(seconds)))
-    reject("adam.seconds", text(seconds), "must be finite and >= 0");
+    reject("adam.seconds", io::format_number(seconds), "must be finite and >= 0");
 }
 
 double AdamStageOptions::learning_rate(int step, int steps) const {
