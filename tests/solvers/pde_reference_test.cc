@@ -182,13 +182,9 @@ reference: {file: timed.txt}
   testutil::expect_located_error(dir / "timed.yaml", {5, 19, "reference.file", "column 'u (m) @ t=2' lies outside the domain's time interval"});
 }
 
-// A short `nfield run` of a file reference: metrics.json has the errors at its points, and
-// the last stage's rel_l2 is the same figure.
-TEST(PdeReference, RunWritesThePointErrors) {
-  const fs::path dir = folder("run");
-  const Eigen::MatrixXd p = grid_points();
-  write_text(dir / "ref.csv", "x,y,u,v\n" + rows(p, exact_values(p), ","));
-  write_text(dir / "run.yaml", std::string(kHead) + "  file: ref.csv\n" + R"yaml(conditions:
+// The rest of a run config after `reference:`: Dirichlet values of both outputs, a tiny
+// field, three Adam steps.
+const char* kRunTail = R"yaml(conditions:
   - {on: boundary, type: dirichlet, value: {u: "sin(pi*x)*y", v: "x + y^2"}}
 field: {type: siren, hidden: [8], first_omega: 2, hidden_omega: 1}
 training:
@@ -198,7 +194,15 @@ training:
   batch: {interior: 32, boundary: 16}
   stages: [{optimizer: adam, steps: 3, lr: 1.0e-3}]
 output: {grid: [5, 5], png: false}
-)yaml");
+)yaml";
+
+// A short `nfield run` of a file reference: metrics.json has the errors at its points, and
+// the last stage's rel_l2 is the same figure.
+TEST(PdeReference, RunWritesThePointErrors) {
+  const fs::path dir = folder("run");
+  const Eigen::MatrixXd p = grid_points();
+  write_text(dir / "ref.csv", "x,y,u,v\n" + rows(p, exact_values(p), ","));
+  write_text(dir / "run.yaml", std::string(kHead) + "  file: ref.csv\n" + kRunTail);
   RunSetup setup = load_run(dir / "run.yaml", {"output.dir=" + (dir / "out").string()});
   ASSERT_EQ(execute_run(setup), 0);
   const nlohmann::json metrics = nlohmann::json::parse(std::ifstream(dir / "out" / "metrics.json"));
@@ -212,17 +216,7 @@ output: {grid: [5, 5], png: false}
 // reference.exact with two outputs: the grid's errors per output beside the overall ones.
 TEST(PdeReference, ExactGivesGridErrorsPerOutput) {
   const fs::path dir = folder("exact_run");
-  write_text(dir / "run.yaml", std::string(kHead) + "  exact: {u: \"sin(pi*x)*y\", v: \"x + y^2\"}\n" + R"yaml(conditions:
-  - {on: boundary, type: dirichlet, value: {u: "sin(pi*x)*y", v: "x + y^2"}}
-field: {type: siren, hidden: [8], first_omega: 2, hidden_omega: 1}
-training:
-  seed: 0
-  threads: 1
-  precision: double
-  batch: {interior: 32, boundary: 16}
-  stages: [{optimizer: adam, steps: 3, lr: 1.0e-3}]
-output: {grid: [5, 5], png: false}
-)yaml");
+  write_text(dir / "run.yaml", std::string(kHead) + "  exact: {u: \"sin(pi*x)*y\", v: \"x + y^2\"}\n" + kRunTail);
   RunSetup setup = load_run(dir / "run.yaml", {"output.dir=" + (dir / "out").string()});
   ASSERT_EQ(execute_run(setup), 0);
   const nlohmann::json m = nlohmann::json::parse(std::ifstream(dir / "out" / "metrics.json"));
