@@ -14,6 +14,7 @@
 #include <utility>
 
 #include "io/text.h"
+#include "io/yaml_structure.h"
 
 namespace nfield::io {
 namespace {
@@ -29,15 +30,6 @@ std::string located_message(const std::string& file, const YAML::Mark& mark,
   return out + message;
 }
 
-bool is_empty(const YAML::Node& node) { return !node.IsDefined() || node.IsNull(); }
-
-std::string describe(const YAML::Node& node) {
-  if (is_empty(node)) return "an empty value";
-  if (node.IsMap()) return "a mapping";
-  if (node.IsSequence()) return "a list of " + std::to_string(node.size());
-  return "'" + node.Scalar() + "'";
-}
-
 // The entry of `choices` that `value` names, case-insensitively; "" with `message` set if none.
 std::string match_choice(const std::string& value, const std::vector<std::string>& choices,
                          std::string& message) {
@@ -45,10 +37,6 @@ std::string match_choice(const std::string& value, const std::vector<std::string
     if (to_lower(choice) == to_lower(value)) return choice;
   message = "expected one of " + (choices.empty() ? std::string("none") : join(choices)) + "; got '" + value + "'";
   return "";
-}
-
-std::string join_key(const std::string& path, std::string_view key) {
-  return path.empty() ? std::string(key) : path + "." + std::string(key);
 }
 
 std::string shortest_text(double value) {
@@ -211,47 +199,6 @@ std::string number_text(T value) {
     return shortest_text(value);
   else
     return std::to_string(value);
-}
-
-// Rejects duplicate and non-scalar keys, which yaml-cpp accepts silently.
-void check_structure(const YAML::Node& node, const std::string& file, const std::string& path) {
-  if (node.IsMap()) {
-    std::map<std::string, int, std::less<>> first_line;
-    for (const auto& entry : node) {
-      const YAML::Node& key = entry.first;
-      if (!key.IsScalar())
-        throw ConfigError(file, key.Mark(), path,
-                          "expected a plain name as key, got " + describe(key));
-      auto [it, inserted] = first_line.emplace(key.Scalar(), key.Mark().line + 1);
-      if (!inserted)
-        throw ConfigError(file, key.Mark(), path,
-                          "duplicate key '" + key.Scalar() + "' (first on line " +
-                              std::to_string(it->second) + ")");
-      check_structure(entry.second, file, join_key(path, key.Scalar()));
-    }
-  } else if (node.IsSequence()) {
-    for (std::size_t i = 0; i < node.size(); ++i)
-      check_structure(node[i], file, path + "[" + std::to_string(i) + "]");
-  }
-}
-
-// A copy of `node` without source marks, so that values from --set are not reported at
-// line numbers of the --set text.
-YAML::Node without_marks(const YAML::Node& node) {
-  if (is_empty(node)) return YAML::Node(YAML::NodeType::Null);
-  if (node.IsScalar()) {
-    YAML::Node out(node.Scalar());
-    out.SetTag(node.Tag());
-    return out;
-  }
-  YAML::Node out(node.IsMap() ? YAML::NodeType::Map : YAML::NodeType::Sequence);
-  if (node.IsMap()) {
-    for (const auto& entry : node) out[without_marks(entry.first)] = without_marks(entry.second);
-  } else {
-    for (const auto& element : node) out.push_back(without_marks(element));
-  }
-  out.SetStyle(node.Style());
-  return out;
 }
 
 void flow_scalar_lists(YAML::Node node) {
@@ -639,108 +586,6 @@ ConfigNode load_config(const std::filesystem::path& path,
   if (in) text << in.rdbuf();
   if (!in || in.bad()) throw ConfigError(file, nowhere, "", "cannot read config file");
   return parse_config(text.str(), file, overrides);
-}
-
-void apply_override(YAML::Node& root, std::string_view assignment) {
-  const std::string where = "--set '" + std::string(assignment) + "'";
-  const auto fail = [&](const std::string& path, const std::string& message) {
-    return ConfigError(where, YAML::Mark::null_mark(), path, message);
-  };
-  const auto trim = [](std::string_view s) {
-    while (!s.empty() && std::isspace(static_cast<unsigned char>(s.front()))) s.remove_prefix(1);
-    while (!s.empty() && std::isspace(static_cast<unsigned char>(s.back()))) s.remove_suffix(1);
-    return s;
-  };
-  const std::size_t equals = assignment.find('=');
-  if (equals == std::string_view::npos) throw fail("", "expected KEY.PATH=VALUE");
-  const std::string_view key = trim(assignment.substr(0, equals));
-  const std::string_view value_text = trim(assignment.substr(equals + 1));
-  if (key.empty()) throw fail("", "missing key path before '='");
-  if (value_text.empty()) throw fail("", "missing value after '='");
-
-  // Key path: name ('[' index ']')* ('.' name ('[' index ']')*)*; a name of digits
-  // indexes a list when the node it applies to is a list.
-  struct Step {
-    std::string name;
-    bool bracketed;
-  };
-  std::vector<Step> steps;
-  std::size_t pos = 0;
-  while (true) {
-    const std::size_t start = pos;
-    while (pos < key.size() && key[pos] != '.' && key[pos] != '[' && key[pos] != ']') ++pos;
-    const std::string_view name = key.substr(start, pos - start);
-    if (name.empty() || trim(name).size() != name.size())
-      throw fail("", "expected a key name at position " + std::to_string(start + 1) +
-                         " of '" + std::string(key) + "'");
-    steps.push_back({std::string(name), false});
-    while (pos < key.size() && key[pos] == '[') {
-      const std::size_t close = key.find(']', pos);
-      const std::string_view index =
-          close == std::string_view::npos ? std::string_view() : key.substr(pos + 1, close - pos - 1);
-      if (index.empty() || !std::all_of(index.begin(), index.end(), [](char c) { return c >= '0' && c <= '9'; }))
-        throw fail("", "expected [INDEX] at position " + std::to_string(pos + 1) + " of '" +
-                           std::string(key) + "'");
-      steps.push_back({std::string(index), true});
-      pos = close + 1;
-    }
-    if (pos == key.size()) break;
-    if (key[pos] != '.')
-      throw fail("", "unexpected '" + std::string(1, key[pos]) + "' at position " +
-                         std::to_string(pos + 1) + " of '" + std::string(key) + "'");
-    ++pos;
-  }
-
-  YAML::Node value;
-  try {
-    value = without_marks(YAML::Load(std::string(value_text)));
-  } catch (const YAML::Exception& e) {
-    throw fail("", "cannot parse the value as YAML: " + e.msg);
-  }
-  check_structure(value, where, "");
-
-  if (is_empty(root)) root = YAML::Node(YAML::NodeType::Map);
-  YAML::Node current;
-  current.reset(root);
-  std::string path;
-  for (std::size_t k = 0; k < steps.size(); ++k) {
-    const Step& step = steps[k];
-    const bool last = k + 1 == steps.size();
-    const bool digits = std::all_of(step.name.begin(), step.name.end(),
-                                    [](char c) { return c >= '0' && c <= '9'; });
-    if (step.bracketed || (digits && current.IsSequence())) {
-      if (!current.IsSequence())
-        throw fail(path, "expected a list to index with [" + step.name + "], got " +
-                             describe(current));
-      std::size_t index = 0;
-      auto [end, ec] = std::from_chars(step.name.data(), step.name.data() + step.name.size(), index);
-      if (ec != std::errc() || index >= current.size())
-        throw fail(path, "index " + step.name + " out of range (the list has " +
-                             std::to_string(current.size()) + " items)");
-      path += "[" + step.name + "]";
-      if (last) {
-        current[index] = value;
-      } else {
-        YAML::Node next = current[index];
-        current.reset(next);
-      }
-    } else {
-      if (!current.IsMap())
-        throw fail(path, "expected a mapping to set key '" + step.name + "' in, got " +
-                             describe(current));
-      path = join_key(path, step.name);
-      if (last) {
-        current[step.name] = value;
-      } else {
-        YAML::Node next = current[step.name];
-        if (is_empty(next)) {
-          current[step.name] = YAML::Node(YAML::NodeType::Map);
-          next.reset(current[step.name]);
-        }
-        current.reset(next);
-      }
-    }
-  }
 }
 
 // ---- writing ----------------------------------------------------------------------

@@ -1,0 +1,61 @@
+// SPDX-License-Identifier: MIT
+#include "io/yaml_structure.h"
+
+#include <map>
+
+#include "io/config.h"
+
+namespace nfield::io {
+
+bool is_empty(const YAML::Node& node) { return !node.IsDefined() || node.IsNull(); }
+
+std::string describe(const YAML::Node& node) {
+  if (is_empty(node)) return "an empty value";
+  if (node.IsMap()) return "a mapping";
+  if (node.IsSequence()) return "a list of " + std::to_string(node.size());
+  return "'" + node.Scalar() + "'";
+}
+
+std::string join_key(const std::string& path, std::string_view key) {
+  return path.empty() ? std::string(key) : path + "." + std::string(key);
+}
+
+void check_structure(const YAML::Node& node, const std::string& file, const std::string& path) {
+  if (node.IsMap()) {
+    std::map<std::string, int, std::less<>> first_line;
+    for (const auto& entry : node) {
+      const YAML::Node& key = entry.first;
+      if (!key.IsScalar())
+        throw ConfigError(file, key.Mark(), path,
+                          "expected a plain name as key, got " + describe(key));
+      auto [it, inserted] = first_line.emplace(key.Scalar(), key.Mark().line + 1);
+      if (!inserted)
+        throw ConfigError(file, key.Mark(), path,
+                          "duplicate key '" + key.Scalar() + "' (first on line " +
+                              std::to_string(it->second) + ")");
+      check_structure(entry.second, file, join_key(path, key.Scalar()));
+    }
+  } else if (node.IsSequence()) {
+    for (std::size_t i = 0; i < node.size(); ++i)
+      check_structure(node[i], file, path + "[" + std::to_string(i) + "]");
+  }
+}
+
+YAML::Node without_marks(const YAML::Node& node) {
+  if (is_empty(node)) return YAML::Node(YAML::NodeType::Null);
+  if (node.IsScalar()) {
+    YAML::Node out(node.Scalar());
+    out.SetTag(node.Tag());
+    return out;
+  }
+  YAML::Node out(node.IsMap() ? YAML::NodeType::Map : YAML::NodeType::Sequence);
+  if (node.IsMap()) {
+    for (const auto& entry : node) out[without_marks(entry.first)] = without_marks(entry.second);
+  } else {
+    for (const auto& element : node) out.push_back(without_marks(element));
+  }
+  out.SetStyle(node.Style());
+  return out;
+}
+
+}  // namespace nfield::io
