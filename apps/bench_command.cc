@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cstdio>
 #include <fstream>
+#include <memory>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -184,153 +185,176 @@ void run_bench(const BenchOptions& options) {
     for (const std::string& line : lines) std::puts(line.c_str());
 }
 
-}  // namespace
+// Everything the subcommand's options write into, shared with its callback.
+struct BenchModes {
+  std::shared_ptr<BenchOptions> step = std::make_shared<BenchOptions>();
+  std::shared_ptr<AccuracyOptions> accuracy = std::make_shared<AccuracyOptions>();
+  std::shared_ptr<NerfBenchOptions> nerf = std::make_shared<NerfBenchOptions>();
+  std::shared_ptr<AutointBenchOptions> autoint = std::make_shared<AutointBenchOptions>();
+  std::shared_ptr<ProblemBenchOptions> problems = std::make_shared<ProblemBenchOptions>();
+  std::shared_ptr<std::filesystem::path> autoint_out = std::make_shared<std::filesystem::path>(autoint->out);
+  // --accuracy, --no-fail, --nerf, --autoint, --no-grid, --problems.
+  std::shared_ptr<bool> accuracy_flag = std::make_shared<bool>(false), no_fail = std::make_shared<bool>(false),
+                        nerf_flag = std::make_shared<bool>(false), autoint_flag = std::make_shared<bool>(false),
+                        no_grid = std::make_shared<bool>(false), problems_flag = std::make_shared<bool>(false);
+};
 
-void add_bench_command(CLI::App& app) {
-  auto options = std::make_shared<BenchOptions>();
-  CLI::App* bench = app.add_subcommand(
-      "bench", "Time full training steps (streams, reverse pass, Adam) of the SIREN reference "
-               "network against the matrix-product rate measured in the same run");
-  bench->add_option("--op", options->ops, "Operators: laplacian (2D), wave (x, y, t), biharmonic (2D)")
+// The step timing of the SIREN reference network (the default mode).
+void add_step_options(CLI::App* bench, const BenchModes& m) {
+  bench->add_option("--op", m.step->ops, "Operators: laplacian (2D), wave (x, y, t), biharmonic (2D)")
       ->check(CLI::IsMember({"laplacian", "wave", "biharmonic"}))
       ->capture_default_str();
-  bench->add_option("--batch", options->batches, "Batch sizes")
+  bench->add_option("--batch", m.step->batches, "Batch sizes")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  bench->add_option("--hidden", options->hidden, "Hidden widths")->check(CLI::PositiveNumber)->capture_default_str();
-  bench->add_option("--steps", options->steps, "Timed steps per configuration (--nerf: 20 unless given)")
+  bench->add_option("--hidden", m.step->hidden, "Hidden widths")->check(CLI::PositiveNumber)->capture_default_str();
+  bench->add_option("--steps", m.step->steps, "Timed steps per configuration (--nerf: 20 unless given)")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
-  bench->add_option("--warmup", options->warmup, "Untimed steps first (--nerf: 3 unless given)")->check(CLI::Range(0, 1000))->capture_default_str();
-  bench->add_option("--threads", options->threads, "Threads (0: all)")->check(CLI::Range(0, 1024))->capture_default_str();
-  bench->add_option("--block", options->block, "Points per block of the chunked pass")
+  bench->add_option("--warmup", m.step->warmup, "Untimed steps first (--nerf: 3 unless given)")->check(CLI::Range(0, 1000))->capture_default_str();
+  bench->add_option("--threads", m.step->threads, "Threads (0: all)")->check(CLI::Range(0, 1024))->capture_default_str();
+  bench->add_option("--block", m.step->block, "Points per block of the chunked pass")
       ->check(CLI::Range(1L, 1L << 20))
       ->capture_default_str();
-  bench->add_flag("--json", options->json_only, "Print only the JSON lines");
+  bench->add_flag("--json", m.step->json_only, "Print only the JSON lines");
+}
 
-  auto accuracy = std::make_shared<AccuracyOptions>();
-  auto accuracy_flag = std::make_shared<bool>(false);
-  bench->add_flag("--accuracy", *accuracy_flag,
+void add_accuracy_options(CLI::App* bench, const BenchModes& m) {
+  bench->add_flag("--accuracy", *m.accuracy_flag,
                   "Run the accuracy table instead (apps/accuracy_bench.cc: the PDE cases' "
                   "configs/accuracy_CASE.yaml and the SIREN experiments' configs): each case's figure "
                   "(rel_l2 after each optimizer stage, PSNR, Chamfer distance), wall time, targets");
-  bench->add_option("--cases", accuracy->cases, "--accuracy: the cases to run (default: all)");
-  bench->add_option("--configs", accuracy->configs, "--accuracy: folder of the cases' configs")
+  bench->add_option("--cases", m.accuracy->cases, "--accuracy: the cases to run (default: all)");
+  bench->add_option("--configs", m.accuracy->configs, "--accuracy: folder of the cases' configs")
       ->check(CLI::ExistingDirectory)
       ->capture_default_str();
-  bench->add_option("--out", accuracy->out, "--accuracy: output folder, one subfolder per case")
+  bench->add_option("--out", m.accuracy->out, "--accuracy: output folder, one subfolder per case")
       ->capture_default_str();
-  auto no_fail = std::make_shared<bool>(false);
-  bench->add_flag("--no-fail", *no_fail,
+  bench->add_flag("--no-fail", *m.no_fail,
                   "--accuracy: exit 0 even when a case misses its target (default: exit code 4, after a "
                   "line naming the cases that missed)");
-  bench->add_option("--set", accuracy->overrides,
+  bench->add_option("--set", m.accuracy->overrides,
                     "--accuracy, --nerf, --autoint: override a value in every case's config, in the --nerf "
                     "config, or in every --autoint run's config");
+}
 
-  auto nerf = std::make_shared<NerfBenchOptions>();
-  auto nerf_flag = std::make_shared<bool>(false);
-  bench->add_flag("--nerf", *nerf_flag,
+void add_nerf_options(CLI::App* bench, const BenchModes& m) {
+  bench->add_flag("--nerf", *m.nerf_flag,
                   "Time radiance-field training (rays/s: ray sampling, network passes, volume rendering "
                   "and its adjoint, Adam) and the render of a test view instead")
       ->excludes("--accuracy");
-  bench->add_option("--config", nerf->config, "--nerf: the radiance-field config")
+  bench->add_option("--config", m.nerf->config, "--nerf: the radiance-field config")
       ->check(CLI::ExistingFile)
       ->capture_default_str();
-  bench->add_option("--rays", nerf->rays, "--nerf: rays per step (0: the config's training.batch.rays)")
+  bench->add_option("--rays", m.nerf->rays, "--nerf: rays per step (0: the config's training.batch.rays)")
       ->check(CLI::Range(0L, 1L << 24))
       ->capture_default_str();
-  bench->add_option("--render-stride", nerf->render_stride,
+  bench->add_option("--render-stride", m.nerf->render_stride,
                     "--nerf: render every k-th pixel of every k-th row of the test view")
       ->check(CLI::Range(1, 4096))
       ->capture_default_str();
-  bench->add_option("--render-repeats", nerf->render_repeats, "--nerf: timed renders of the test view")
+  bench->add_option("--render-repeats", m.nerf->render_repeats, "--nerf: timed renders of the test view")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
-  auto autoint = std::make_shared<AutointBenchOptions>();
-  auto autoint_flag = std::make_shared<bool>(false);
-  bench->add_flag("--autoint", *autoint_flag,
+}
+
+void add_autoint_options(CLI::App* bench, const BenchModes& m) {
+  bench->add_flag("--autoint", *m.autoint_flag,
                   "Train AutoInt volume rendering at K sections per ray and NeRF quadrature for the same "
                   "time each, then compare test PSNR and render time per frame")
       ->excludes("--accuracy")
       ->excludes("--nerf");
-  bench->add_option("--seconds", autoint->seconds, "--autoint: seconds of training per run")
+  bench->add_option("--seconds", m.autoint->seconds, "--autoint: seconds of training per run")
       ->check(CLI::Range(0.1, 1e6))
       ->capture_default_str();
-  bench->add_option("--sections", autoint->sections, "--autoint: the section counts K to train")
+  bench->add_option("--sections", m.autoint->sections, "--autoint: the section counts K to train")
       ->check(CLI::Range(1, 4096))
       ->capture_default_str();
-  bench->add_option("--nerf-samples", autoint->nerf_samples, "--autoint: samples per ray of the NeRF reference")
+  bench->add_option("--nerf-samples", m.autoint->nerf_samples, "--autoint: samples per ray of the NeRF reference")
       ->check(CLI::Range(1, 4096))
       ->capture_default_str();
-  bench->add_option("--train-samples", autoint->samples_per_ray,
+  bench->add_option("--train-samples", m.autoint->samples_per_ray,
                     "--autoint: AutoInt training samples per ray, spread over the K sections")
       ->check(CLI::Range(1, 65536))
       ->capture_default_str();
-  bench->add_option("--autoint-config", autoint->autoint_config, "--autoint: the AutoInt config")
+  bench->add_option("--autoint-config", m.autoint->autoint_config, "--autoint: the AutoInt config")
       ->check(CLI::ExistingFile)
       ->capture_default_str();
-  bench->add_option("--nerf-config", autoint->nerf_config, "--autoint: the NeRF reference config (no occupancy grid)")
+  bench->add_option("--nerf-config", m.autoint->nerf_config, "--autoint: the NeRF reference config (no occupancy grid)")
       ->check(CLI::ExistingFile)
       ->capture_default_str();
-  bench->add_option("--grid-config", autoint->grid_config, "--autoint: the NeRF config with an occupancy grid")
+  bench->add_option("--grid-config", m.autoint->grid_config, "--autoint: the NeRF config with an occupancy grid")
       ->check(CLI::ExistingFile)
       ->capture_default_str();
-  bench->add_option("--sampler", autoint->sampler,
+  bench->add_option("--sampler", m.autoint->sampler,
                     "--autoint: AutoInt runs with equal sections (off), with the sampling network (on), or both")
       ->check(CLI::IsMember({"both", "off", "on"}))
       ->capture_default_str();
-  auto no_grid = std::make_shared<bool>(false);
-  bench->add_flag("--no-grid", *no_grid, "--autoint: leave out the occupancy-grid NeRF");
-  auto autoint_out = std::make_shared<std::filesystem::path>(autoint->out);
-  bench->add_option("--autoint-out", *autoint_out, "--autoint: output folder, one subfolder per run")
+  bench->add_flag("--no-grid", *m.no_grid, "--autoint: leave out the occupancy-grid NeRF");
+  bench->add_option("--autoint-out", *m.autoint_out, "--autoint: output folder, one subfolder per run")
       ->capture_default_str();
-  auto problems = std::make_shared<ProblemBenchOptions>();
-  auto problems_flag = std::make_shared<bool>(false);
-  bench->add_flag("--problems", *problems_flag,
+}
+
+void add_problem_options(CLI::App* bench, const BenchModes& m) {
+  bench->add_flag("--problems", *m.problems_flag,
                   "Time a training step (loss and gradient) of built-in problem configs against their "
                   "`problem: pde` restatements (CASE.yaml, CASE_pde.yaml) in the same run, at each --batch "
                   "interior points (default 4096), and print the ratio")
       ->excludes("--accuracy")
       ->excludes("--nerf")
       ->excludes("--autoint");
-  bench->add_option("--pde-cases", problems->cases, "--problems: the cases (CASE.yaml and CASE_pde.yaml)")
+  bench->add_option("--pde-cases", m.problems->cases, "--problems: the cases (CASE.yaml and CASE_pde.yaml)")
       ->capture_default_str();
-  bench->add_option("--pde-configs", problems->configs, "--problems: folder of the cases' configs")
+  bench->add_option("--pde-configs", m.problems->configs, "--problems: folder of the cases' configs")
       ->check(CLI::ExistingDirectory)
       ->capture_default_str();
-  bench->callback([bench, options, accuracy, accuracy_flag, no_fail, nerf, nerf_flag, autoint, autoint_flag, no_grid,
-                   autoint_out, problems, problems_flag] {
-    if (*problems_flag) {
-      if (bench->count("--batch") > 0) problems->batches = options->batches;
-      problems->steps = options->steps;
-      problems->warmup = options->warmup;
-      problems->threads = options->threads;
-      problems->json_only = options->json_only;
-      return run_problem_bench(*problems);
-    }
-    if (*autoint_flag) {
-      autoint->with_grid = !*no_grid;
-      autoint->out = *autoint_out;
-      autoint->overrides = accuracy->overrides;
-      const int code = run_autoint_bench(*autoint);
-      if (code != 0) throw CLI::RuntimeError(code);
-      return;
-    }
-    if (*nerf_flag) {
-      // Steps of a radiance field are long and vary with the rays drawn: more of them by default.
-      if (bench->count("--steps") > 0) nerf->steps = options->steps;
-      if (bench->count("--warmup") > 0) nerf->warmup = options->warmup;
-      nerf->threads = options->threads;
-      nerf->json_only = options->json_only;
-      nerf->overrides = accuracy->overrides;
-      return run_nerf_bench(*nerf);
-    }
-    if (!*accuracy_flag) return run_bench(*options);
-    accuracy->fail_on_miss = !*no_fail;
-    const int code = run_accuracy_bench(*accuracy);
+}
+
+void run_selected(const CLI::App* bench, const BenchModes& m) {
+  if (*m.problems_flag) {
+    if (bench->count("--batch") > 0) m.problems->batches = m.step->batches;
+    m.problems->steps = m.step->steps;
+    m.problems->warmup = m.step->warmup;
+    m.problems->threads = m.step->threads;
+    m.problems->json_only = m.step->json_only;
+    return run_problem_bench(*m.problems);
+  }
+  if (*m.autoint_flag) {
+    m.autoint->with_grid = !*m.no_grid;
+    m.autoint->out = *m.autoint_out;
+    m.autoint->overrides = m.accuracy->overrides;
+    const int code = run_autoint_bench(*m.autoint);
     if (code != 0) throw CLI::RuntimeError(code);
-  });
+    return;
+  }
+  if (*m.nerf_flag) {
+    // Steps of a radiance field are long and vary with the rays drawn: more of them by default.
+    if (bench->count("--steps") > 0) m.nerf->steps = m.step->steps;
+    if (bench->count("--warmup") > 0) m.nerf->warmup = m.step->warmup;
+    m.nerf->threads = m.step->threads;
+    m.nerf->json_only = m.step->json_only;
+    m.nerf->overrides = m.accuracy->overrides;
+    return run_nerf_bench(*m.nerf);
+  }
+  if (!*m.accuracy_flag) return run_bench(*m.step);
+  m.accuracy->fail_on_miss = !*m.no_fail;
+  const int code = run_accuracy_bench(*m.accuracy);
+  if (code != 0) throw CLI::RuntimeError(code);
+}
+
+}  // namespace
+
+void add_bench_command(CLI::App& app) {
+  CLI::App* bench = app.add_subcommand(
+      "bench", "Time full training steps (streams, reverse pass, Adam) of the SIREN reference "
+               "network against the matrix-product rate measured in the same run");
+  const BenchModes modes;
+  add_step_options(bench, modes);
+  add_accuracy_options(bench, modes);
+  add_nerf_options(bench, modes);
+  add_autoint_options(bench, modes);
+  add_problem_options(bench, modes);
+  bench->callback([bench, modes] { run_selected(bench, modes); });
 }
 
 }  // namespace nfield::apps
