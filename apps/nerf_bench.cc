@@ -8,7 +8,10 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <random>
+#include <string>
+#include <vector>
 
 #include "apps/gemm_rate.h"
 #include "fields/field.h"
@@ -124,71 +127,66 @@ FrameTiming time_frame(const solvers::RunSetup& setup, const fields::Field<float
   return timing;
 }
 
-}  // namespace
+// One timed training step: where its time went, and the products it did.
+struct StepTiming {
+  double total, sampling, passes, rendering, adam, flops;
+  Eigen::Index samples;
+};
 
-void run_nerf_bench(const NerfBenchOptions& options) {
-  solvers::RunSetup setup = solvers::load_run(options.config, options.overrides);
-  if (setup.field.type != "nerf")
-    throw CLI::ValidationError("--config", options.config.string() + " trains a '" + setup.field.type +
-                                               "' field; --nerf needs a radiance field (field.type: nerf)");
-  const int threads = options.threads > 0 ? options.threads : setup.training.threads;
-  if (threads > 0) omp_set_num_threads(threads);
-  const int used_threads = omp_get_max_threads();
-  fields::Field<float> field(setup.field, {setup.training.block, used_threads});
-  const std::vector<GemmShape> shapes = dense_shapes(field);
+// The trainer's loss terms of a radiance-field config, refused when they train derivative
+// streams, with their layouts and batch sizes (solvers/training/trainer.cc: resample, term_loss).
+struct NerfTerms {
+  std::vector<solvers::LossTerm> terms;
+  std::vector<autodiff::StreamLayout> layouts;
+  std::vector<Eigen::Index> batch;
+  long rays = 0;
+};
 
-  // The trainer's loss terms and batch sizes (solvers/training/trainer.cc: resample, term_loss).
-  const std::vector<solvers::LossTerm> terms = setup.problem->loss_terms();
-  for (const solvers::LossTerm& term : terms)
+NerfTerms nerf_terms(const solvers::RunSetup& setup, const NerfBenchOptions& options) {
+  NerfTerms t{setup.problem->loss_terms(), {}, {}, 0};
+  for (const solvers::LossTerm& term : t.terms) {
     if (term.spec.tangents.cols() > 0)
       throw CLI::ValidationError("--config", options.config.string() + " trains derivative streams (loss term '" +
                                                  term.name + "'); --nerf times NeRF's quadrature (for problem: "
                                                  "autoint_nerf use --autoint)");
-  std::vector<autodiff::StreamLayout> layouts;
-  std::vector<Eigen::Index> batch;
-  long rays = 0;
-  for (const solvers::LossTerm& term : terms) {
-    layouts.emplace_back(term.spec);
-    batch.push_back(options.rays > 0 ? options.rays : setup.training.batch.at(term.batch_key));
-    if (term.batch_key == "rays") rays += batch.back();
+    t.layouts.emplace_back(term.spec);
+    t.batch.push_back(options.rays > 0 ? options.rays : setup.training.batch.at(term.batch_key));
+    if (term.batch_key == "rays") t.rays += t.batch.back();
   }
+  return t;
+}
+
+// Adam steps of the first stage on `field`, the first `options.warmup` untimed.
+std::vector<StepTiming> timed_steps(const solvers::RunSetup& setup, const NerfTerms& t, fields::Field<float>& field,
+                                    const NerfBenchOptions& options, int threads) {
+  const std::vector<GemmShape> shapes = dense_shapes(field);
   const solvers::StageOptions& stage = setup.training.stages.front();
   const auto& schedule = stage.options<solvers::AdamStageOptions>();
   solvers::Adam<float> adam(field.parameter_count(), {schedule.lr});
   solvers::Random rng(setup.training.seed);
-  std::vector<solvers::TermPoints> points(terms.size());
-  std::vector<autodiff::Matrix<float>> x(terms.size());
-  std::vector<std::unique_ptr<solvers::Residual>> residuals(terms.size());
+  const std::size_t n_terms = t.terms.size();
+  std::vector<solvers::TermPoints> points(n_terms);
+  std::vector<autodiff::Matrix<float>> x(n_terms);
+  std::vector<std::unique_ptr<solvers::Residual>> residuals(n_terms);
   autodiff::Vector<float> gradient(field.parameter_count());
   std::atomic<double> loss_seconds{0};
-
-  if (!options.json_only) {
-    std::printf("radiance field of %s: %ld parameters, float, %d threads, block %ld points, %ld rays a step\n",
-                options.config.string().c_str(), static_cast<long>(field.parameter_count()), used_threads,
-                setup.training.block, rays);
-    std::fflush(stdout);
-  }
-  struct Step {
-    double total, sampling, passes, rendering, adam, flops;
-    Eigen::Index samples;
-  };
-  std::vector<Step> timed;
+  std::vector<StepTiming> timed;
   for (int s = 0; s < options.warmup + options.steps; ++s) {
     const auto start = Clock::now();
     Eigen::Index samples = 0;
-    for (size_t k = 0; k < terms.size(); ++k) {
-      points[k] = terms[k].sample(rng, batch[k]);
+    for (size_t k = 0; k < n_terms; ++k) {
+      points[k] = t.terms[k].sample(rng, t.batch[k]);
       x[k] = points[k].x.cast<float>();
-      residuals[k] = terms[k].residual(points[k]);
+      residuals[k] = t.terms[k].residual(points[k]);
       samples += points[k].x.rows();
     }
     const auto drawn = Clock::now();
     gradient.setZero();
     loss_seconds = 0;
-    for (size_t k = 0; k < terms.size(); ++k) {
-      const solvers::ResidualLoss<float> loss(*residuals[k], terms[k].weight, points[k].residual_rows());
+    for (size_t k = 0; k < n_terms; ++k) {
+      const solvers::ResidualLoss<float> loss(*residuals[k], t.terms[k].weight, points[k].residual_rows());
       const TimedLoss timed_loss(loss, loss_seconds);
-      field.value_and_gradient(field.parameters().data(), layouts[k],
+      field.value_and_gradient(field.parameters().data(), t.layouts[k],
                                autodiff::Batch<float>{x[k], nullptr, points[k].groups}, timed_loss,
                                gradient.data());
     }
@@ -200,27 +198,61 @@ void run_nerf_bench(const NerfBenchOptions& options) {
       return std::chrono::duration<double>(b - a).count();
     };
     timed.push_back({between(start, end), between(start, drawn), between(drawn, passed),
-                     loss_seconds.load() / used_threads, between(passed, end), gemm_flops(shapes, samples),
-                     samples});
+                     loss_seconds.load() / threads, between(passed, end), gemm_flops(shapes, samples), samples});
   }
+  return timed;
+}
 
-  Step sum{};
+// The steps' sums and the rates that put them in proportion: the plain Eigen products of the
+// same shapes and the machine's FMA peak, both measured now.
+struct NerfReport {
+  StepTiming sum{};
+  double steps = 0, median_ms = 0, network = 0, mlp_gflops = 0, gemm = 0, peak = 0, step_gflop = 0;
+  Eigen::Index mean_samples = 0;
+};
+
+NerfReport summarise(const std::vector<StepTiming>& timed, const std::vector<GemmShape>& shapes, int threads,
+                     int steps) {
+  NerfReport r;
   std::vector<double> step_ms;
-  for (const Step& t : timed) {
-    sum.total += t.total, sum.sampling += t.sampling, sum.passes += t.passes;
-    sum.rendering += t.rendering, sum.adam += t.adam, sum.flops += t.flops, sum.samples += t.samples;
+  for (const StepTiming& t : timed) {
+    r.sum.total += t.total, r.sum.sampling += t.sampling, r.sum.passes += t.passes;
+    r.sum.rendering += t.rendering, r.sum.adam += t.adam, r.sum.flops += t.flops, r.sum.samples += t.samples;
     step_ms.push_back(1e3 * t.total);
   }
-  const double n = static_cast<double>(timed.size());
-  const double median_ms = median(step_ms);
-  const double network = sum.passes - sum.rendering;
-  const double mlp_gflops = sum.flops / network * 1e-9;
-  const auto mean_samples = static_cast<Eigen::Index>(std::llround(static_cast<double>(sum.samples) / n));
-  const double gemm = gemm_gflops(shapes, std::max<Eigen::Index>(mean_samples, 1), std::max(3, options.steps / 2));
-  const double peak = fma_peak_gflops(used_threads, 5);
-  const double step_gflop = gemm_flops(shapes, mean_samples) * 1e-9;
-  const FrameTiming frame = time_frame(setup, field, options);
+  r.steps = static_cast<double>(timed.size());
+  r.median_ms = median(step_ms);
+  r.network = r.sum.passes - r.sum.rendering;
+  r.mlp_gflops = r.sum.flops / r.network * 1e-9;
+  r.mean_samples = static_cast<Eigen::Index>(std::llround(static_cast<double>(r.sum.samples) / r.steps));
+  r.gemm = gemm_gflops(shapes, std::max<Eigen::Index>(r.mean_samples, 1), std::max(3, steps / 2));
+  r.peak = fma_peak_gflops(threads, 5);
+  r.step_gflop = gemm_flops(shapes, r.mean_samples) * 1e-9;
+  return r;
+}
 
+void print_report(const NerfReport& r, const FrameTiming& frame, const NerfBenchOptions& options, long rays) {
+  const StepTiming& sum = r.sum;
+  std::printf("%d steps after %d: %.0f rays/s, median step %.2f ms (%ld samples)\n", options.steps, options.warmup,
+              static_cast<double>(rays) / (r.median_ms * 1e-3), r.median_ms, static_cast<long>(r.mean_samples));
+  std::printf("  drawing rays %4.1f %%   network passes %4.1f %%   rendering loss %4.1f %%   Adam %4.1f %%\n",
+              100 * sum.sampling / sum.total, 100 * r.network / sum.total, 100 * sum.rendering / sum.total,
+              100 * sum.adam / sum.total);
+  std::printf("  dense products: %.1f GFLOP/s in the network passes, %.1f over the whole step;\n"
+              "  plain Eigen products of the same shapes: %.1f GFLOP/s (%.0f %%)\n",
+              r.mlp_gflops, sum.flops / sum.total * 1e-9, r.gemm, 100 * r.mlp_gflops / r.gemm);
+  std::printf("  the machine's float FMA peak on %d threads: %.1f GFLOP/s; the network passes use %.0f %% of it\n"
+              "  (%.2f GFLOP of products a step: no implementation of this step runs faster than %.1f ms)\n",
+              omp_get_max_threads(), r.peak, 100 * r.mlp_gflops / r.peak, r.step_gflop,
+              1e3 * r.step_gflop / r.peak);
+  std::printf("render of a %ld-pixel view, %ld samples: %.1f ms (median of %d)\n", static_cast<long>(frame.pixels),
+              static_cast<long>(frame.samples), frame.median_ms, options.render_repeats);
+}
+
+std::string json_line(const NerfReport& r, const FrameTiming& frame, const NerfBenchOptions& options, long rays,
+                      const solvers::RunSetup& setup, Eigen::Index parameters) {
+  const StepTiming& sum = r.sum;
+  const double n = r.steps;
   char line[1536];
   std::snprintf(
       line, sizeof line,
@@ -232,30 +264,39 @@ void run_nerf_bench(const NerfBenchOptions& options) {
       "\"step_gflops\": %.2f, \"gemm_gflops\": %.2f, \"mlp_gemm_ratio\": %.4f, \"fma_peak_gflops\": %.2f, "
       "\"mlp_peak_ratio\": %.4f, \"step_gflop\": %.4f, \"frame_ms\": %.2f, "
       "\"frame_pixels\": %ld, \"frame_samples\": %ld}",
-      options.config.string().c_str(), rays, static_cast<long>(mean_samples), options.steps, options.warmup,
-      used_threads, setup.training.block, static_cast<long>(field.parameter_count()),
-      static_cast<double>(rays) / (median_ms * 1e-3), median_ms, 1e3 * sum.sampling / n, 1e3 * network / n,
-      1e3 * sum.rendering / n, 1e3 * sum.adam / n, sum.sampling / sum.total, network / sum.total,
-      sum.rendering / sum.total, sum.adam / sum.total, mlp_gflops, sum.flops / sum.total * 1e-9, gemm,
-      mlp_gflops / gemm, peak, mlp_gflops / peak, step_gflop, frame.median_ms, static_cast<long>(frame.pixels), static_cast<long>(frame.samples));
+      options.config.string().c_str(), rays, static_cast<long>(r.mean_samples), options.steps, options.warmup,
+      omp_get_max_threads(), setup.training.block, static_cast<long>(parameters),
+      static_cast<double>(rays) / (r.median_ms * 1e-3), r.median_ms, 1e3 * sum.sampling / n, 1e3 * r.network / n,
+      1e3 * sum.rendering / n, 1e3 * sum.adam / n, sum.sampling / sum.total, r.network / sum.total,
+      sum.rendering / sum.total, sum.adam / sum.total, r.mlp_gflops, sum.flops / sum.total * 1e-9, r.gemm,
+      r.mlp_gflops / r.gemm, r.peak, r.mlp_gflops / r.peak, r.step_gflop, frame.median_ms,
+      static_cast<long>(frame.pixels), static_cast<long>(frame.samples));
+  return line;
+}
+
+}  // namespace
+
+void run_nerf_bench(const NerfBenchOptions& options) {
+  solvers::RunSetup setup = solvers::load_run(options.config, options.overrides);
+  if (setup.field.type != "nerf")
+    throw CLI::ValidationError("--config", options.config.string() + " trains a '" + setup.field.type +
+                                               "' field; --nerf needs a radiance field (field.type: nerf)");
+  const int threads = options.threads > 0 ? options.threads : setup.training.threads;
+  if (threads > 0) omp_set_num_threads(threads);
+  const int used_threads = omp_get_max_threads();
+  fields::Field<float> field(setup.field, {setup.training.block, used_threads});
+  const NerfTerms terms = nerf_terms(setup, options);
   if (!options.json_only) {
-    std::printf("%d steps after %d: %.0f rays/s, median step %.2f ms (%ld samples)\n", options.steps,
-                options.warmup, static_cast<double>(rays) / (median_ms * 1e-3), median_ms,
-                static_cast<long>(mean_samples));
-    std::printf("  drawing rays %4.1f %%   network passes %4.1f %%   rendering loss %4.1f %%   Adam %4.1f %%\n",
-                100 * sum.sampling / sum.total, 100 * network / sum.total, 100 * sum.rendering / sum.total,
-                100 * sum.adam / sum.total);
-    std::printf("  dense products: %.1f GFLOP/s in the network passes, %.1f over the whole step;\n"
-                "  plain Eigen products of the same shapes: %.1f GFLOP/s (%.0f %%)\n",
-                mlp_gflops, sum.flops / sum.total * 1e-9, gemm, 100 * mlp_gflops / gemm);
-    std::printf("  the machine's float FMA peak on %d threads: %.1f GFLOP/s; the network passes use %.0f %% of it\n"
-                "  (%.2f GFLOP of products a step: no implementation of this step runs faster than %.1f ms)\n",
-                used_threads, peak, 100 * mlp_gflops / peak, step_gflop, 1e3 * step_gflop / peak);
-    std::printf("render of a %ld-pixel view, %ld samples: %.1f ms (median of %d)\n",
-                static_cast<long>(frame.pixels), static_cast<long>(frame.samples), frame.median_ms,
-                options.render_repeats);
+    std::printf("radiance field of %s: %ld parameters, float, %d threads, block %ld points, %ld rays a step\n",
+                options.config.string().c_str(), static_cast<long>(field.parameter_count()), used_threads,
+                setup.training.block, terms.rays);
+    std::fflush(stdout);
   }
-  std::puts(line);
+  const std::vector<StepTiming> timed = timed_steps(setup, terms, field, options, used_threads);
+  const NerfReport report = summarise(timed, dense_shapes(field), used_threads, options.steps);
+  const FrameTiming frame = time_frame(setup, field, options);
+  if (!options.json_only) print_report(report, frame, options, terms.rays);
+  std::puts(json_line(report, frame, options, terms.rays, setup, field.parameter_count()).c_str());
   std::fflush(stdout);
 }
 
