@@ -36,16 +36,14 @@ std::pair<double, double> target(int sections) {
 
 nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
 
-}  // namespace
-
-int run_autoint_bench(const AutointBenchOptions& options) {
+// Every config is read and checked before any training, so a bad one fails at once.
+std::vector<Run> plan_runs(const AutointBenchOptions& options) {
   std::vector<std::string> common = options.overrides;
   common.push_back("training.stages[0].seconds=" + std::to_string(options.seconds));
   auto with = [&common](std::vector<std::string> extra) {
     extra.insert(extra.begin(), common.begin(), common.end());
     return extra;
   };
-  // Every config is read and checked before any training, so a bad one fails at once.
   std::vector<Run> runs;
   runs.push_back({"nerf_quadrature", 0, options.nerf_samples, false,
                   solvers::load_run(options.nerf_config, with({"render.samples=" + std::to_string(options.nerf_samples)}),
@@ -71,6 +69,73 @@ int run_autoint_bench(const AutointBenchOptions& options) {
       solvers::RunSetup setup = solvers::load_run(options.autoint_config, with(set), options.out / name);
       runs.push_back({name, k, k + 1, sampler, std::move(setup), {}});
     }
+  return runs;
+}
+
+struct Row {
+  std::string run;
+  int sections, evaluations;
+  bool sampler;
+  double steps, train_s, psnr, ssim, ms;
+};
+
+// A row per run, and one more for the occupancy-grid NeRF marched through every cell: what the
+// grid's skipping gains.
+std::vector<Row> table_rows(const std::vector<Run>& runs) {
+  std::vector<Row> rows;
+  for (const Run& run : runs) {
+    const nlohmann::json& m = run.metrics;
+    Row row{run.name, run.sections, run.evaluations_per_ray, run.sampler, m["steps"].get<double>(), m["wall_s"].get<double>(),
+            m["psnr_mean"].get<double>(), m["ssim_mean"].get<double>(), m["render_ms_mean"].get<double>()};
+    rows.push_back(row);
+    if (run.name == "nerf_grid" && m.contains("render_ms_dense_mean")) {
+      row.run = "nerf_grid_dense";
+      row.psnr = m["psnr_dense_mean"].get<double>();
+      row.ssim = std::nan("");
+      row.ms = m["render_ms_dense_mean"].get<double>();
+      rows.push_back(row);
+    }
+  }
+  return rows;
+}
+
+// Prints the row against the reference and returns it as a JSON line.
+nlohmann::ordered_json print_row(const Row& row, double reference_ms, double reference_psnr) {
+  const double speedup = reference_ms / row.ms, loss = reference_psnr - row.psnr;
+  const auto [target_speedup, target_loss] = target(row.sections);
+  const bool has_target = std::isfinite(target_speedup);
+  const bool met = has_target && speedup >= target_speedup && loss <= target_loss;
+  char evaluations[16] = "march";
+  if (row.evaluations > 0) std::snprintf(evaluations, sizeof evaluations, row.sampler ? "%d+S" : "%d", row.evaluations);
+  char goal[64] = "";
+  if (has_target)
+    std::snprintf(goal, sizeof goal, "%.0fx, %.1f dB: %s", target_speedup, target_loss, met ? "met" : "not met");
+  std::printf("%-20s %5s %9s %7.0f %10.2f %8.4f %10.1f %8.2fx %9.2f  %s\n", row.run.c_str(),
+              row.sections > 0 ? std::to_string(row.sections).c_str() : "-", evaluations, row.steps, row.psnr,
+              row.ssim, row.ms, speedup, loss, goal);
+  nlohmann::ordered_json line;
+  line["bench"] = "autoint";
+  line["run"] = row.run;
+  line["sections"] = row.sections;
+  line["evaluations_per_ray"] = row.evaluations;
+  line["sampling_network"] = row.sampler;
+  line["steps"] = row.steps;
+  line["train_s"] = row.train_s;
+  line["psnr_mean"] = number(row.psnr);
+  line["ssim_mean"] = number(row.ssim);
+  line["render_ms"] = row.ms;
+  line["speedup"] = speedup;
+  line["psnr_loss_db"] = loss;
+  line["target_speedup"] = number(target_speedup);
+  line["target_psnr_loss_db"] = number(target_loss);
+  if (has_target) line["met"] = met;
+  return line;
+}
+
+}  // namespace
+
+int run_autoint_bench(const AutointBenchOptions& options) {
+  std::vector<Run> runs = plan_runs(options);
   for (size_t r = 0; r < runs.size(); ++r) {
     std::printf("== %s (%zu/%zu, %.0f s of training): %s\n", runs[r].name.c_str(), r + 1, runs.size(),
                 options.seconds, runs[r].setup.config_path.string().c_str());
@@ -84,68 +149,13 @@ int run_autoint_bench(const AutointBenchOptions& options) {
   }
 
   const nlohmann::json& reference = runs.front().metrics;
-  const double reference_ms = reference["render_ms_mean"].get<double>();
-  const double reference_psnr = reference["psnr_mean"].get<double>();
-  struct Row {
-    std::string run;
-    int sections, evaluations;
-    bool sampler;
-    double steps, train_s, psnr, ssim, ms;
-  };
-  std::vector<Row> rows;
-  for (const Run& run : runs) {
-    const nlohmann::json& m = run.metrics;
-    Row row{run.name, run.sections, run.evaluations_per_ray, run.sampler, m["steps"].get<double>(), m["wall_s"].get<double>(),
-            m["psnr_mean"].get<double>(), m["ssim_mean"].get<double>(), m["render_ms_mean"].get<double>()};
-    rows.push_back(row);
-    if (run.name == "nerf_grid" && m.contains("render_ms_dense_mean")) {
-      // The same field marched through every cell: what the grid's skipping gains.
-      row.run = "nerf_grid_dense";
-      row.psnr = m["psnr_dense_mean"].get<double>();
-      row.ssim = std::nan("");
-      row.ms = m["render_ms_dense_mean"].get<double>();
-      rows.push_back(row);
-    }
-  }
-
   std::printf("\nsame training time (%.0f s) per run; reference: NeRF quadrature, %d samples a ray\n",
               options.seconds, options.nerf_samples);
   std::printf("%-20s %5s %9s %7s %10s %8s %10s %9s %9s  %s\n", "run", "K", "evals/ray", "steps", "test PSNR",
               "SSIM", "ms/frame", "speed-up", "dB lost", "target (speed-up >=, dB lost <=)");
   nlohmann::ordered_json all = nlohmann::ordered_json::array();
-  std::vector<std::string> lines;
-  for (const Row& row : rows) {
-    const double speedup = reference_ms / row.ms, loss = reference_psnr - row.psnr;
-    const auto [target_speedup, target_loss] = target(row.sections);
-    const bool has_target = std::isfinite(target_speedup);
-    const bool met = has_target && speedup >= target_speedup && loss <= target_loss;
-    char evaluations[16] = "march";
-    if (row.evaluations > 0) std::snprintf(evaluations, sizeof evaluations, row.sampler ? "%d+S" : "%d", row.evaluations);
-    char goal[64] = "";
-    if (has_target)
-      std::snprintf(goal, sizeof goal, "%.0fx, %.1f dB: %s", target_speedup, target_loss, met ? "met" : "not met");
-    std::printf("%-20s %5s %9s %7.0f %10.2f %8.4f %10.1f %8.2fx %9.2f  %s\n", row.run.c_str(),
-                row.sections > 0 ? std::to_string(row.sections).c_str() : "-", evaluations, row.steps, row.psnr,
-                row.ssim, row.ms, speedup, loss, goal);
-    nlohmann::ordered_json line;
-    line["bench"] = "autoint";
-    line["run"] = row.run;
-    line["sections"] = row.sections;
-    line["evaluations_per_ray"] = row.evaluations;
-    line["sampling_network"] = row.sampler;
-    line["steps"] = row.steps;
-    line["train_s"] = row.train_s;
-    line["psnr_mean"] = number(row.psnr);
-    line["ssim_mean"] = number(row.ssim);
-    line["render_ms"] = row.ms;
-    line["speedup"] = speedup;
-    line["psnr_loss_db"] = loss;
-    line["target_speedup"] = number(target_speedup);
-    line["target_psnr_loss_db"] = number(target_loss);
-    if (has_target) line["met"] = met;
-    lines.push_back(line.dump());
-    all.push_back(line);
-  }
+  for (const Row& row : table_rows(runs))
+    all.push_back(print_row(row, reference["render_ms_mean"].get<double>(), reference["psnr_mean"].get<double>()));
   std::fflush(stdout);
   const std::filesystem::path json = options.out / "autoint_bench.json";
   io::write_atomically(json, [&all](const std::filesystem::path& temporary) {
@@ -153,7 +163,7 @@ int run_autoint_bench(const AutointBenchOptions& options) {
     file << all.dump(1) << "\n";
     if (!file) throw std::runtime_error("write failed");
   });
-  for (const std::string& line : lines) std::puts(line.c_str());
+  for (const auto& line : all) std::puts(line.dump().c_str());
   std::printf("wrote %s\n", json.string().c_str());
   return 0;
 }
