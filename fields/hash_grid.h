@@ -131,7 +131,7 @@ class HashGridEncoding final : public autodiff::Module<Scalar> {
   std::uint32_t row(int level, const int* vertex) const;
 
  private:
-  struct Cell;     // one point's cell at one level (hash_grid.cc)
+  struct Cell;     // one point's cell at one level (hash_grid_cell.h)
   struct Offsets;  // where each input stream sits in a point's gathered inputs
   struct Level {
     HashGridLevel info;
