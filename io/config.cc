@@ -39,18 +39,6 @@ std::string match_choice(const std::string& value, const std::vector<std::string
   return "";
 }
 
-std::string shortest_text(double value) {
-  if (std::isnan(value)) return ".nan";
-  if (std::isinf(value)) return value > 0 ? ".inf" : "-.inf";
-  std::array<char, 64> buffer;
-  auto [end, ec] = std::to_chars(buffer.data(), buffer.data() + buffer.size(), value);
-  std::string text(buffer.data(), end);
-  // YAML 1.1 readers (PyYAML) want a dot in exponent notation: 1e-05 -> 1.0e-05.
-  if (auto e = text.find('e'); e != std::string::npos && text.find('.') == std::string::npos)
-    text.insert(e, ".0");
-  return text;
-}
-
 std::optional<double> parse_double(std::string_view text) {
   const std::string lower = to_lower(text);
   if (lower == ".inf" || lower == "+.inf") return std::numeric_limits<double>::infinity();
@@ -196,22 +184,9 @@ T convert(const YAML::Node& node, const Where& where) {
 template <class T>
 std::string number_text(T value) {
   if constexpr (std::is_same_v<T, double>)
-    return shortest_text(value);
+    return yaml_number_text(value);
   else
     return std::to_string(value);
-}
-
-void flow_scalar_lists(YAML::Node node) {
-  if (node.IsMap()) {
-    for (auto entry : node) flow_scalar_lists(entry.second);
-  } else if (node.IsSequence()) {
-    bool scalars_only = true;
-    for (auto element : node) {
-      scalars_only = scalars_only && (element.IsScalar() || element.IsNull());
-      flow_scalar_lists(element);
-    }
-    if (scalars_only && node.size() > 0) node.SetStyle(YAML::EmitterStyle::Flow);
-  }
 }
 
 }  // namespace
@@ -586,26 +561,6 @@ ConfigNode load_config(const std::filesystem::path& path,
   if (in) text << in.rdbuf();
   if (!in || in.bad()) throw ConfigError(file, nowhere, "", "cannot read config file");
   return parse_config(text.str(), file, overrides);
-}
-
-// ---- writing ----------------------------------------------------------------------
-
-std::string to_yaml(const YAML::Node& node) {
-  YAML::Node copy = YAML::Clone(node);
-  flow_scalar_lists(copy);
-  YAML::Emitter out;
-  out.SetIndent(2);
-  out << copy;
-  return std::string(out.c_str()) + "\n";
-}
-
-YAML::Node yaml_number(double value) { return YAML::Node(shortest_text(value)); }
-
-YAML::Node yaml_numbers(std::span<const double> values) {
-  YAML::Node out(YAML::NodeType::Sequence);
-  for (double value : values) out.push_back(yaml_number(value));
-  out.SetStyle(YAML::EmitterStyle::Flow);
-  return out;
 }
 
 }  // namespace nfield::io

@@ -1,6 +1,9 @@
 // SPDX-License-Identifier: MIT
 #include "io/yaml_structure.h"
 
+#include <array>
+#include <charconv>
+#include <cmath>
 #include <map>
 
 #include "io/config.h"
@@ -56,6 +59,18 @@ YAML::Node without_marks(const YAML::Node& node) {
   }
   out.SetStyle(node.Style());
   return out;
+}
+
+std::string yaml_number_text(double value) {
+  if (std::isnan(value)) return ".nan";
+  if (std::isinf(value)) return value > 0 ? ".inf" : "-.inf";
+  std::array<char, 64> buffer;
+  auto [end, ec] = std::to_chars(buffer.data(), buffer.data() + buffer.size(), value);
+  std::string text(buffer.data(), end);
+  // YAML 1.1 readers (PyYAML) want a dot in exponent notation: 1e-05 -> 1.0e-05.
+  if (auto e = text.find('e'); e != std::string::npos && text.find('.') == std::string::npos)
+    text.insert(e, ".0");
+  return text;
 }
 
 }  // namespace nfield::io

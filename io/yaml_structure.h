@@ -28,4 +28,8 @@ void check_structure(const YAML::Node& node, const std::string& file, const std:
 
 YAML::Node without_marks(const YAML::Node& node);
 
+// The shortest text that reads back as `value`, in the form YAML 1.1 readers (PyYAML) take:
+// 1.0e-05 rather than 1e-05, .nan, .inf.
+std::string yaml_number_text(double value);
+
 }  // namespace nfield::io
