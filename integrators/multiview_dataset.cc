@@ -145,18 +145,17 @@ void DatasetOptions::validate() const {
                                   str(background[k]) + ": must be in [0, 1]");
 }
 
-MultiviewDataset read_transforms(const fs::path& json_path, const DatasetOptions& options) {
-  options.validate();
+namespace {
+
+// The file's JSON; a syntax error or an out-of-range number is reported at its line and column.
+json parse_transforms(const fs::path& json_path) {
   const std::string file = json_path.string();
-  const Reader in(file);
   if (!fs::is_regular_file(json_path)) throw DatasetError(file + ": cannot open: no such file");
   std::ifstream stream(json_path, std::ios::binary);
   const std::string text{std::istreambuf_iterator<char>(stream), std::istreambuf_iterator<char>()};
   if (!stream) throw DatasetError(file + ": cannot read the file");
-
-  json root;
   try {
-    root = json::parse(text);
+    return json::parse(text);
   } catch (const json::parse_error& e) {
     // e.byte is the 1-based offset of the character where parsing stopped.
     throw DatasetError(file + ":" + line_column(text, e.byte > 0 ? e.byte - 1 : 0) +
@@ -172,68 +171,89 @@ MultiviewDataset read_transforms(const fs::path& json_path, const DatasetOptions
         where = ":" + line_column(text, at);
     throw DatasetError(file + where + ": malformed JSON: " + why + " (not a finite number)");
   }
-  if (!root.is_object())
-    throw in.fail("(root)", std::string("expected an object, got ") + root.type_name());
+}
 
-  // Intrinsics: the numbers now, the image size once the first image is read.
-  const auto fl_x = in.positive(root, "fl_x"), fl_y = in.positive(root, "fl_y");
-  const auto angle_x = in.number(root, "camera_angle_x", "camera_angle_x");
-  const auto angle_y = in.number(root, "camera_angle_y", "camera_angle_y");
-  for (const auto& [key, angle] : {std::pair{"camera_angle_x", angle_x}, std::pair{"camera_angle_y", angle_y}})
-    if (angle && !(*angle > 0 && *angle < std::numbers::pi))
-      throw in.fail(key, *angle, "must be in (0, pi) radians");
-  if (!fl_x && !angle_x) throw in.fail("camera_angle_x", "missing (and no fl_x either)");
-  const auto cx = in.number(root, "cx", "cx"), cy = in.number(root, "cy", "cy");
-  const auto w = in.size(root, "w"), h = in.size(root, "h");
+// The camera keys of the file's root: focal lengths in pixels or view angles, the principal
+// point and the image size, each optional; the size is known once the first image is read.
+struct CameraKeys {
+  std::optional<double> fl_x, fl_y, angle_x, angle_y, cx, cy;
+  std::optional<int> w, h;
 
+  CameraKeys(const Reader& in, const json& root)
+      : fl_x(in.positive(root, "fl_x")),
+        fl_y(in.positive(root, "fl_y")),
+        angle_x(in.number(root, "camera_angle_x", "camera_angle_x")),
+        angle_y(in.number(root, "camera_angle_y", "camera_angle_y")),
+        cx(in.number(root, "cx", "cx")),
+        cy(in.number(root, "cy", "cy")),
+        w(in.size(root, "w")),
+        h(in.size(root, "h")) {
+    for (const auto& [key, angle] : {std::pair{"camera_angle_x", angle_x}, std::pair{"camera_angle_y", angle_y}})
+      if (angle && !(*angle > 0 && *angle < std::numbers::pi)) throw in.fail(key, *angle, "must be in (0, pi) radians");
+    if (!fl_x && !angle_x) throw in.fail("camera_angle_x", "missing (and no fl_x either)");
+  }
+
+  // The size every image must have: w and h when given, else the first image's.
+  Intrinsics intrinsics(const io::Image& first) const {
+    Intrinsics k;
+    k.width = w.value_or(first.width);
+    k.height = h.value_or(first.height);
+    k.fx = fl_x ? *fl_x : 0.5 * k.width / std::tan(0.5 * *angle_x);
+    k.fy = fl_y ? *fl_y : fl_x ? *fl_x : angle_y ? 0.5 * k.height / std::tan(0.5 * *angle_y) : k.fx;
+    k.cx = cx.value_or(0.5 * k.width);
+    k.cy = cy.value_or(0.5 * k.height);
+    return k;
+  }
+};
+
+// frames[i]: its pose and image path, the image read.
+PosedImage read_frame(const Reader& in, const json& frame, const std::string& key, const fs::path& folder,
+                      io::Image& image) {
+  if (!frame.is_object()) throw in.fail(key, std::string("expected an object, got ") + frame.type_name());
+  const json& file_path = in.member(frame, "file_path", key + ".file_path");
+  if (!file_path.is_string())
+    throw in.fail(key + ".file_path", std::string("expected a string, got ") + file_path.type_name());
+  PosedImage posed;
+  posed.camera.camera_to_world =
+      read_pose(in, in.member(frame, "transform_matrix", key + ".transform_matrix"), key + ".transform_matrix");
+  posed.path = folder / file_path.get<std::string>();
+  if (!posed.path.has_extension()) posed.path += ".png";
+  if (!fs::is_regular_file(posed.path))
+    throw in.fail(key + ".file_path", "'" + posed.path.string() + "': no such file");
+  try {
+    image = io::read_png(posed.path);
+  } catch (const std::exception& e) {
+    throw in.fail(key + ".file_path", e.what());
+  }
+  return posed;
+}
+
+}  // namespace
+
+MultiviewDataset read_transforms(const fs::path& json_path, const DatasetOptions& options) {
+  options.validate();
+  const Reader in(json_path.string());
+  const json root = parse_transforms(json_path);
+  if (!root.is_object()) throw in.fail("(root)", std::string("expected an object, got ") + root.type_name());
+  const CameraKeys camera(in, root);
   const json& frames = in.member(root, "frames", "frames");
-  if (!frames.is_array())
-    throw in.fail("frames", std::string("expected an array, got ") + frames.type_name());
+  if (!frames.is_array()) throw in.fail("frames", std::string("expected an array, got ") + frames.type_name());
   if (frames.empty()) throw in.fail("frames", "no frames");
 
   MultiviewDataset data;
   data.source = json_path;
   data.background = options.background;
-  const fs::path folder = json_path.parent_path();
   for (size_t i = 0; i < frames.size(); ++i) {
     const std::string key = element("frames", i);
-    const json& frame = frames[i];
-    if (!frame.is_object())
-      throw in.fail(key, std::string("expected an object, got ") + frame.type_name());
-    const json& file_path = in.member(frame, "file_path", key + ".file_path");
-    if (!file_path.is_string())
-      throw in.fail(key + ".file_path", std::string("expected a string, got ") + file_path.type_name());
-    PosedImage posed;
-    posed.camera.camera_to_world =
-        read_pose(in, in.member(frame, "transform_matrix", key + ".transform_matrix"),
-                  key + ".transform_matrix");
-    posed.path = folder / file_path.get<std::string>();
-    if (!posed.path.has_extension()) posed.path += ".png";
-    if (!fs::is_regular_file(posed.path))
-      throw in.fail(key + ".file_path", "'" + posed.path.string() + "': no such file");
     io::Image image;
-    try {
-      image = io::read_png(posed.path);
-    } catch (const std::exception& e) {
-      throw in.fail(key + ".file_path", e.what());
-    }
-    if (i == 0) {
-      // The size every image must have: w and h when given, else the first image's.
-      Intrinsics& k = data.intrinsics;
-      k.width = w.value_or(image.width);
-      k.height = h.value_or(image.height);
-      k.fx = fl_x ? *fl_x : 0.5 * k.width / std::tan(0.5 * *angle_x);
-      k.fy = fl_y ? *fl_y : fl_x ? *fl_x : angle_y ? 0.5 * k.height / std::tan(0.5 * *angle_y) : k.fx;
-      k.cx = cx.value_or(0.5 * k.width);
-      k.cy = cy.value_or(0.5 * k.height);
-    }
+    PosedImage posed = read_frame(in, frames[i], key, json_path.parent_path(), image);
+    if (i == 0) data.intrinsics = camera.intrinsics(image);
     const Intrinsics& k = data.intrinsics;
     if (image.width != k.width || image.height != k.height)
       throw in.fail(key + ".file_path",
                     "'" + posed.path.string() + "' is " + std::to_string(image.width) + "x" +
-                        std::to_string(image.height) + " pixels, expected " +
-                        std::to_string(k.width) + "x" + std::to_string(k.height) +
-                        (w || h ? " (w and h of the file)" : " (the size of frames[0])"));
+                        std::to_string(image.height) + " pixels, expected " + std::to_string(k.width) + "x" +
+                        std::to_string(k.height) + (camera.w || camera.h ? " (w and h of the file)" : " (the size of frames[0])"));
     posed.camera.intrinsics = k;
     composite(image, options.background, posed);
     data.frames.push_back(std::move(posed));
