@@ -268,10 +268,10 @@ py::object run(const std::filesystem::path& config, const py::object& set,
 using namespace nfield;
 using namespace nfield::python;
 
-PYBIND11_MODULE(nfield, m) {
-  m.doc() = "nfield: neural fields that solve PDEs. Evaluate checkpoints at NumPy points "
-            "(values, gradients, Laplacians, any derivative stream) and run configs.";
-  m.attr("__version__") = std::string(version());
+namespace {
+
+// nfield.ConfigError, nfield.H5Error and nfield.DivergedError.
+void add_exceptions(py::module_& m) {
   py::register_exception<io::ConfigError>(m, "ConfigError", PyExc_ValueError);
   py::register_exception<io::H5Error>(m, "H5Error", PyExc_OSError);
   g_diverged_error = PyErr_NewExceptionWithDoc(
@@ -280,7 +280,10 @@ PYBIND11_MODULE(nfield, m) {
       "`metrics` attribute holds metrics.json (finished: false, stopped, divergence).",
       PyExc_RuntimeError, nullptr);
   m.attr("DivergedError") = py::handle(g_diverged_error);
+}
 
+// nfield.Field: a checkpoint's field evaluated at NumPy points.
+void add_field_class(py::module_& m) {
   // The lambdas return py::object: an item accessor of the temporary dict would outlive it.
   const auto values = [](const CheckpointField& f, const py::handle& x) -> py::object {
     return f.streams(x, StreamSpec::values(f.input_dim()))["value"];
@@ -326,7 +329,10 @@ PYBIND11_MODULE(nfield, m) {
           "'value' N × m, 'tangents' N × m × T, 'operators' N × m × Q, "
           "'taylor' N × m × P × K (coefficient k at index k − 1).")
       .def("__repr__", &CheckpointField::repr);
+}
 
+// nfield.load, nfield.validate, nfield.run.
+void add_functions(py::module_& m) {
   m.def(
       "load",
       [](const std::filesystem::path& path, bool ansatz) {
@@ -353,4 +359,15 @@ PYBIND11_MODULE(nfield, m) {
         "the outputs, and returns metrics.json as a dict. A bad config raises "
         "nfield.ConfigError before anything is written; a run that diverges (a non-finite "
         "step) raises nfield.DivergedError after writing its last finite state.");
+}
+
+}  // namespace
+
+PYBIND11_MODULE(nfield, m) {
+  m.doc() = "nfield: neural fields that solve PDEs. Evaluate checkpoints at NumPy points "
+            "(values, gradients, Laplacians, any derivative stream) and run configs.";
+  m.attr("__version__") = std::string(version());
+  add_exceptions(m);
+  add_field_class(m);
+  add_functions(m);
 }
