@@ -32,10 +32,10 @@ PdeReference::PdeReference(const io::ConfigNode& node, const Domain& domain, con
 }
 
 Eigen::MatrixXd PdeReference::exact(const Eigen::MatrixXd& x) const {
-  if (burgers_) {
+  if (burgers_ || allen_cahn_) {
     Eigen::MatrixXd xt(x.rows(), 2);
     xt << x.col(0), x.col(domain_.time_column());
-    return burgers_sine_solution(xt, *burgers_);
+    return burgers_ ? Eigen::MatrixXd(burgers_sine_solution(xt, *burgers_)) : Eigen::MatrixXd(allen_cahn_->evaluate(xt));
   }
   Eigen::MatrixXd out(x.rows(), static_cast<Eigen::Index>(exact_.size()));
   std::vector<double> scratch;
@@ -63,13 +63,21 @@ void PdeReference::read_exact(const io::ConfigNode& node, const std::vector<std:
   }
 }
 
-// `solution: burgers_sine, nu: EXPRESSION`: on x ∈ [−1, 1] (any part of it) and t ∈ [0, 10],
-// one output.
+// `solution: NAME` and its parameters; both named solutions are of one output over one
+// space variable and time.
 void PdeReference::read_named_solution(const io::ConfigNode& node, int outputs, const PdeExpressions& e) {
-  node.get_choice("solution", {"burgers_sine"});
+  const std::string name = node.get_choice("solution", {"burgers_sine", "allen_cahn"});
   node.require("solution", domain_.space_dim() == 1 && domain_.has_time() && outputs == 1,
-               "burgers_sine needs one output over one space variable and time (domain: lower, upper "
+               name + " needs one output over one space variable and time (domain: lower, upper "
                "of size 1 and time)");
+  if (name == "burgers_sine")
+    read_burgers(node, e);
+  else
+    read_allen_cahn(node, e);
+}
+
+// `nu: EXPRESSION`: on x ∈ [−1, 1] (any part of it) and t ∈ [0, 10].
+void PdeReference::read_burgers(const io::ConfigNode& node, const PdeExpressions& e) {
   node.require("solution", domain_.time().first >= 0 && domain_.time().second <= 10,
                "burgers_sine is computed for t in [0, 10]");
   const double nu = e.constant(node, "nu");
@@ -77,6 +85,25 @@ void PdeReference::read_named_solution(const io::ConfigNode& node, int outputs, 
   BurgersSineOptions options;
   options.nu = nu;
   burgers_ = options;
+}
+
+// `diffusion`, `reaction` (constant expressions, default 1e-4 and 5), `modes` (default
+// 1024): u_t = ε u_xx + ρ(u − u³) from x² cos πx, periodic on [−1, 1], solved from t = 0
+// to the domain's end time at load (0.1 s at the defaults).
+void PdeReference::read_allen_cahn(const io::ConfigNode& node, const PdeExpressions& e) {
+  node.require("solution", domain_.lower()[0] >= -1 - 1e-12 && domain_.upper()[0] <= 1 + 1e-12,
+               "allen_cahn is computed on x in [-1, 1] (periodic)");
+  node.require("solution", domain_.time().first == 0 && domain_.time().second <= 10,
+               "allen_cahn is computed from its initial value x^2 cos(pi x) at t = 0, to t <= 10");
+  AllenCahnOptions options;
+  if (node.has("diffusion")) options.diffusion = e.constant(node, "diffusion");
+  node.require("diffusion", options.diffusion > 0 && options.diffusion <= 1, "expected a diffusion in (0, 1]");
+  if (node.has("reaction")) options.reaction = e.constant(node, "reaction");
+  node.require("reaction", options.reaction >= 0 && options.reaction <= 100, "expected a reaction rate in [0, 100]");
+  if (node.has("modes")) options.modes = node.get_in_range("modes", 16, 65536);
+  node.require("modes", options.modes % 2 == 0, "expected an even number of modes");
+  options.t_end = domain_.time().second;
+  allen_cahn_ = std::make_shared<const AllenCahnReference>(options);
 }
 
 // The file's column of each variable, then of each output, and where to blame a missing one.

@@ -6,6 +6,9 @@
 //                                                           string for one output)
 //   reference: {solution: burgers_sine, nu: nu}             the Cole–Hopf solution
 //                                                           (solvers/problems/burgers_reference.h)
+//   reference: {solution: allen_cahn, diffusion: 1.0e-4,     the ETDRK4 solution from x² cos πx,
+//               reaction: 5, modes: 1024}                   periodic on [−1, 1], t from 0
+//                                                           (solvers/problems/allen_cahn_reference.h)
 //   reference:
 //     file: data/heat.csv          # CSV with a header, a whitespace (COMSOL) table, or
 //                                  # "F.h5:/dataset" (io/point_table.h); relative to the config
@@ -28,6 +31,7 @@
 
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -35,6 +39,7 @@
 #include "io/compiled_expression.h"
 #include "io/config.h"
 #include "solvers/domain.h"
+#include "solvers/problems/allen_cahn_reference.h"
 #include "solvers/problems/burgers_reference.h"
 
 namespace nfield::io {
@@ -59,7 +64,7 @@ class PdeReference {
                const PdeExpressions& expressions, const std::filesystem::path& config_dir);
 
   // Values anywhere (an expression or a named solution).
-  bool has_exact() const { return !exact_.empty() || burgers_.has_value(); }
+  bool has_exact() const { return !exact_.empty() || burgers_.has_value() || allen_cahn_ != nullptr; }
   Eigen::MatrixXd exact(const Eigen::MatrixXd& x) const;  // n × outputs
   // Points and values from a file (rows: points).
   bool has_points() const { return points_.rows() > 0; }
@@ -69,6 +74,8 @@ class PdeReference {
  private:
   void read_exact(const io::ConfigNode& node, const std::vector<std::string>& outputs, const PdeExpressions& e);
   void read_named_solution(const io::ConfigNode& node, int outputs, const PdeExpressions& e);
+  void read_burgers(const io::ConfigNode& node, const PdeExpressions& e);
+  void read_allen_cahn(const io::ConfigNode& node, const PdeExpressions& e);
   void read_file(const io::ConfigNode& node, const std::vector<std::string>& outputs,
                  const std::filesystem::path& config_dir);
   void read_timed_columns(const io::PointTable& table, const ReferenceColumns& names,
@@ -77,6 +84,7 @@ class PdeReference {
   Domain domain_{{0.0}, {1.0}};
   std::vector<io::CompiledExpression> exact_;
   std::optional<BurgersSineOptions> burgers_;
+  std::shared_ptr<const AllenCahnReference> allen_cahn_;  // solved once at load, shared by copies
   Eigen::MatrixXd points_, values_;
 };
 

@@ -3,8 +3,9 @@
 // reference.file of `problem: pde` (solvers/problems/pde_reference.h): the same points and
 // values as a CSV, a COMSOL-style whitespace table and an HDF5 dataset give the same
 // per-output and overall errors as reference.exact at those points; the COMSOL layout with
-// one column per output and time; column names from the config; metrics.json of a run; and
-// every refused file located at its key with the table's message.
+// one column per output and time; column names from the config; metrics.json of a run;
+// every refused file located at its key with the table's message; and `solution:
+// allen_cahn` (the ETDRK4 solution at the config's coefficients) with its refused keys.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -16,6 +17,7 @@
 #include <nlohmann/json.hpp>
 
 #include "io/hdf5_file.h"
+#include "solvers/problems/allen_cahn_reference.h"
 #include "solvers/problems/pde_reference.h"
 #include "solvers/run.h"
 #include "tests/testing/config_errors.h"
@@ -256,6 +258,60 @@ TEST(PdeReference, RefusedFilesAreLocated) {
                        {8, 16, "reference.columns.w", "'w' is neither a variable nor an output (variables: x, y; outputs: u, v)"});
   expect_located_error(config("both", "  file: no_v.csv\n  exact: {u: \"0\", v: \"0\"}\n"),
                        {7, 3, "reference", "expected one of exact, solution, file"});
+}
+
+const char* kAllenCahn = R"yaml(problem: pde
+domain: {lower: [-1], upper: [1], time: [0, 1]}
+constants: {eps: 1.0e-4}
+equation:
+  residuals: ["u_t - eps*u_xx + 5*u^3 - 5*u"]
+reference: {solution: allen_cahn, diffusion: eps, reaction: 5, modes: 256}
+)yaml";
+
+// reference.solution: allen_cahn is the ETDRK4 solution at the config's coefficients (the
+// same values as solvers::AllenCahnReference with those options), over the domain's time.
+TEST(PdeReference, AllenCahnSolution) {
+  const fs::path dir = folder("allen_cahn");
+  write_text(dir / "ac.yaml", kAllenCahn);
+  const RunSetup setup = load_run(dir / "ac.yaml", {});
+  ASSERT_TRUE(setup.problem->has_exact());
+  Eigen::MatrixXd x(4, 2);
+  x << -0.5, 0.0, 0.3, 0.25, 1.0, 0.6, -0.95, 1.0;
+  const Eigen::MatrixXd u = setup.problem->exact(x);
+  const AllenCahnReference reference({.diffusion = 1e-4, .reaction = 5, .modes = 256});
+  for (Eigen::Index i = 0; i < x.rows(); ++i) EXPECT_EQ(u(i, 0), reference(x(i, 0), x(i, 1))) << i;
+  EXPECT_NEAR(u(0, 0), 0.25 * std::cos(std::numbers::pi * 0.5), 1e-12);  // the initial value x² cos πx
+  // Another diffusion gives another solution (the key is read, not the default).
+  write_text(dir / "ac_other.yaml", std::string(kAllenCahn).replace(std::string(kAllenCahn).find("eps: 1.0e-4"), 11, "eps: 1.0e-3"));
+  Eigen::MatrixXd line(201, 2);
+  line.col(0) = Eigen::VectorXd::LinSpaced(201, -1, 1);
+  line.col(1).setConstant(1.0);
+  const double change = (load_run(dir / "ac_other.yaml", {}).problem->exact(line) - setup.problem->exact(line)).cwiseAbs().maxCoeff();
+  EXPECT_GT(change, 1e-2);
+}
+
+TEST(PdeReference, AllenCahnKeysAreChecked) {
+  using testutil::expect_located_error;
+  const fs::path dir = folder("allen_cahn_refused");
+  const auto config = [&](const std::string& name, const std::string& from, const std::string& to) {
+    std::string text = kAllenCahn;
+    text.replace(text.find(from), from.size(), to);
+    const fs::path path = dir / (name + ".yaml");
+    write_text(path, text);
+    return path;
+  };
+  expect_located_error(config("modes", "modes: 256", "modes: 255"), {6, 71, "reference.modes", "even number of modes"});
+  expect_located_error(config("modes_range", "modes: 256", "modes: 8"), {6, 71, "reference.modes", "[16, 65536]"});
+  expect_located_error(config("diffusion", "diffusion: eps", "diffusion: -eps"),
+                       {6, 46, "reference.diffusion", "expected a diffusion in (0, 1]"});
+  expect_located_error(config("unknown", "diffusion: eps", "diffusion: eps, nu: 1"),
+                       {6, 51, "reference.nu", "unknown key"});
+  expect_located_error(config("box", "lower: [-1]", "lower: [-2]"),
+                       {6, 23, "reference.solution", "allen_cahn is computed on x in [-1, 1]"});
+  expect_located_error(config("start", "time: [0, 1]", "time: [0.5, 1]"),
+                       {6, 23, "reference.solution", "from its initial value"});
+  expect_located_error(config("name", "allen_cahn", "allen_kahn"),
+                       {6, 23, "reference.solution", "allen_cahn"});
 }
 
 }  // namespace
