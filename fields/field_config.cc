@@ -8,8 +8,11 @@
 namespace nfield::fields {
 
 FieldOptions field_options_from_config(const io::ConfigNode& node, int input_dim, int output_dim,
-                                       std::uint64_t seed, std::vector<std::string> input_names) {
+                                       std::uint64_t seed, std::vector<std::string> input_names,
+                                       SineFrequencies sine) {
   FieldOptions o;
+  o.first_omega = sine.first;
+  o.hidden_omega = sine.hidden;
   o.input_dim = input_dim;
   o.output_dim = output_dim;
   o.type = node.get_choice("type", field_type_names(), FieldOptions().type);

@@ -14,6 +14,7 @@
 #include <string_view>
 #include <vector>
 
+#include "fields/field_config.h"
 #include "io/config.h"
 #include "solvers/residual.h"
 
@@ -72,6 +73,12 @@ class Problem {
   virtual void give_input_variances();
   virtual int output_dim() const { return 1; }
   virtual std::vector<std::string> output_names() const { return {"u"}; }
+  // first_omega and hidden_omega of a field whose config names none: SIREN's 30 and 30 for
+  // the fits of signals and surfaces, fields::kPdeSineFrequencies (10 and 1) for problems that
+  // solve a differential equation (why: fields/field_config.h, SineFrequencies).
+  virtual fields::SineFrequencies default_sine_frequencies() const {
+    return fields::kSignalSineFrequencies;
+  }
   virtual std::vector<LossTerm> loss_terms() const = 0;
   // The loss term whose residual is written on the output grid (-1: none).
   virtual int residual_term() const { return 0; }

@@ -394,7 +394,8 @@ RunSetup setup_run(io::ConfigNode root, const std::filesystem::path& config,
   s.field = fields::field_options_from_config(s.root.child_or_empty("field"),
                                               s.problem->field_input_dim(),
                                               s.problem->output_dim(), s.training.seed,
-                                              s.problem->domain().input_names());
+                                              s.problem->domain().input_names(),
+                                              s.problem->default_sine_frequencies());
   // Encodings that read variances beside the coordinates (integrated_positional) need a
   // problem that gives them; it then appends them to every point it hands the field.
   if (fields::reads_variances(s.field.encoding)) {

@@ -295,6 +295,9 @@ class Eikonal final : public Problem {
     return {factored_ ? "tau" : "u"};
   }
 
+  fields::SineFrequencies default_sine_frequencies() const override {
+    return fields::kPdeSineFrequencies;  // a differential equation: fields/field_config.h
+  }
   std::vector<LossTerm> loss_terms() const override {
     const int d = domain_.space_dim();
     LossTerm pde;

@@ -236,6 +236,9 @@ class Helmholtz final : public Problem {
     return {"u"};
   }
 
+  fields::SineFrequencies default_sine_frequencies() const override {
+    return fields::kPdeSineFrequencies;  // a differential equation: fields/field_config.h
+  }
   std::vector<LossTerm> loss_terms() const override {
     LossTerm pde;
     pde.name = "pde";

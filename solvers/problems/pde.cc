@@ -114,6 +114,9 @@ class Pde final : public Problem {
   int output_dim() const override { return static_cast<int>(outputs_.size()); }
   std::vector<std::string> output_names() const override { return outputs_; }
 
+  fields::SineFrequencies default_sine_frequencies() const override {
+    return fields::kPdeSineFrequencies;  // a differential equation: fields/field_config.h
+  }
   std::vector<LossTerm> loss_terms() const override {
     std::vector<LossTerm> terms;
     for (const ResidualSpec& r : residuals_) {

@@ -31,6 +31,9 @@ class Poisson final : public Problem {
 
   const Domain& domain() const override { return domain_; }
 
+  fields::SineFrequencies default_sine_frequencies() const override {
+    return fields::kPdeSineFrequencies;  // a differential equation: fields/field_config.h
+  }
   std::vector<LossTerm> loss_terms() const override {
     LossTerm pde;
     pde.name = "pde";

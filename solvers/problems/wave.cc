@@ -98,6 +98,9 @@ class Wave final : public Problem {
 
   const Domain& domain() const override { return domain_; }
 
+  fields::SineFrequencies default_sine_frequencies() const override {
+    return fields::kPdeSineFrequencies;  // a differential equation: fields/field_config.h
+  }
   std::vector<LossTerm> loss_terms() const override {
     const int d = domain_.space_dim(), n_in = domain_.input_dim(), t = domain_.time_column();
     LossTerm pde;

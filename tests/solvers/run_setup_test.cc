@@ -79,6 +79,55 @@ TEST(LoadRun, ResolvedConfigReadsBackToItself) {
   EXPECT_EQ(again.output.grid, (std::vector<int>{5, 5}));
 }
 
+// ---- sine frequencies by problem ----------------------------------------------------
+
+// A field config that names no first_omega or hidden_omega gets the problem's: 10 and 1 for an
+// equation (Poisson, `problem: pde`), SIREN's 30 and 30 for a signal fit (autoint_1d); a
+// value the config names wins.
+fields::FieldOptions field_of(const std::string& text) { return load_run(write_config(text), {}).field; }
+
+TEST(SineDefaults, EquationsStartAtTenAndOne) {
+  const std::string siren = "field: {type: siren, hidden: [8, 8]}\n";
+  const std::string line = "field: {type: siren, hidden: [8, 8], first_omega: 3, hidden_omega: 1}\n";
+  fields::FieldOptions poisson = field_of(replaced(line, siren));
+  EXPECT_EQ(poisson.first_omega, 10.0);
+  EXPECT_EQ(poisson.hidden_omega, 1.0);
+  // A sine MLP reads hidden_omega on every layer: sin(Wx + b), DeepXDE's "sin".
+  poisson = field_of(replaced(line, "field: {type: mlp, activation: sine, hidden: [8]}\n"));
+  EXPECT_EQ(poisson.hidden_omega, 1.0);
+  poisson = field_of(replaced(line, "field: {type: siren, hidden: [8, 8], first_omega: 3}\n"));
+  EXPECT_EQ(poisson.first_omega, 3.0);
+  EXPECT_EQ(poisson.hidden_omega, 1.0);
+  const fields::FieldOptions pde = field_of(
+      "problem: pde\n"
+      "domain: {lower: [0], upper: [1]}\n"
+      "equation: {residuals: [\"u_xx + 1\"]}\n"
+      "conditions: [{on: boundary, type: dirichlet, value: \"0\"}]\n"
+      "field: {type: siren, hidden: [8, 8]}\n"
+      "training: {stages: [{optimizer: adam, steps: 1}]}\n");
+  EXPECT_EQ(pde.first_omega, 10.0);
+  EXPECT_EQ(pde.hidden_omega, 1.0);
+}
+
+TEST(SineDefaults, SignalFitsKeepSirensThirty) {
+  const std::string autoint =
+      "problem: autoint_1d\n"
+      "domain: {lower: [-1], upper: [1]}\n"
+      "equation: {integrand: \"cos(10*x)\", antiderivative: \"sin(10*x)/10\", intervals: 100}\n"
+      "field: {type: siren, hidden: [8, 8]SPEC}\n"
+      "training: {stages: [{optimizer: adam, steps: 1}]}\n";
+  auto with = [&](const std::string& spec) {
+    std::string text = autoint;
+    return field_of(text.replace(text.find("SPEC"), 4, spec));
+  };
+  fields::FieldOptions fit = with("");
+  EXPECT_EQ(fit.first_omega, 30.0);
+  EXPECT_EQ(fit.hidden_omega, 30.0);
+  fit = with(", first_omega: 2, hidden_omega: 1");
+  EXPECT_EQ(fit.first_omega, 2.0);
+  EXPECT_EQ(fit.hidden_omega, 1.0);
+}
+
 // ---- trainer state -----------------------------------------------------------------
 
 template <typename Scalar>
