@@ -147,20 +147,26 @@ class Pde final : public Problem {
   // reference.file: the error at its points, after every stage and in metrics.json.
   std::optional<double> reported_error(const OutputContext& context) const override {
     if (!reference_.has_points()) return std::nullopt;
-    return output_errors(context.values(reference_.points()), reference_.values()).all_rel_l2;
+    return reference_.errors(context.values).all_rel_l2;
   }
   void write_outputs(const OutputContext& context, std::vector<std::pair<std::string, double>>& metrics) const override {
     if (!reference_.has_points()) return;
-    const OutputErrors e = output_errors(context.values(reference_.points()), reference_.values());
+    const OutputErrors e = reference_.errors(context.values);
     metrics.emplace_back("rel_l2", e.all_rel_l2);
     metrics.emplace_back("max_abs_err", e.all_max_abs);
+    std::string per_output;
     for (std::size_t c = 0; outputs_.size() > 1 && c < outputs_.size(); ++c) {
+      if (e.points[c] == 0) continue;  // no file has this output
       metrics.emplace_back("rel_l2_" + outputs_[c], e.rel_l2[c]);
       metrics.emplace_back("max_abs_err_" + outputs_[c], e.max_abs[c]);
+      char line[96];
+      std::snprintf(line, sizeof line, "; %s: rel_l2 %.3e, max_abs_err %.3e", outputs_[c].c_str(), e.rel_l2[c],
+                    e.max_abs[c]);
+      per_output += line;
     }
-    metrics.emplace_back("reference_points", static_cast<double>(reference_.points().rows()));
-    std::printf("reference.file, %ld points: rel_l2 %.3e, max_abs_err %.3e\n",
-                static_cast<long>(reference_.points().rows()), e.all_rel_l2, e.all_max_abs);
+    metrics.emplace_back("reference_points", static_cast<double>(reference_.point_count()));
+    std::printf("reference.file, %ld points: rel_l2 %.3e, max_abs_err %.3e%s\n",
+                static_cast<long>(reference_.point_count()), e.all_rel_l2, e.all_max_abs, per_output.c_str());
   }
 
  private:
