@@ -18,16 +18,20 @@ bool contains(const std::vector<std::string>& names, const std::string& name) {
 }  // namespace
 
 PdeReference::PdeReference(const io::ConfigNode& node, const Domain& domain, const std::vector<std::string>& outputs,
-                           const PdeExpressions& expressions, const std::filesystem::path& config_dir)
-    : domain_(domain), outputs_(static_cast<int>(outputs.size())) {
+                           const PdeExpressions& expressions, const std::filesystem::path& config_dir,
+                           std::size_t defaults)
+    : domain_(domain),
+      outputs_(static_cast<int>(outputs.size())),
+      defaults_(static_cast<int>(defaults > 0 ? defaults : outputs.size())) {
+  const std::vector<std::string> own(outputs.begin(), outputs.begin() + defaults_);
   const int given = (node.has("exact") ? 1 : 0) + (node.has("solution") ? 1 : 0) + (node.has("file") ? 1 : 0);
   node.require(given == 1, "expected one of exact, solution, file");
   if (node.has("solution"))
-    read_named_solution(node, static_cast<int>(outputs.size()), expressions);
+    read_named_solution(node, defaults_, expressions);
   else if (node.has("file"))
     read_files(node, outputs, config_dir);
   else
-    read_exact(node, outputs, expressions);
+    read_exact(node, own, expressions);
   node.reject_unknown_keys();
 }
 
@@ -139,11 +143,11 @@ void PdeReference::read_files(const io::ConfigNode& node, const std::vector<std:
   }
 }
 
-namespace {
-
-// `outputs` of one file: names of the problem's outputs, distinct; default all of them.
-std::vector<std::string> file_outputs(const io::ConfigNode& node, const std::vector<std::string>& outputs) {
-  if (!node.has("outputs")) return outputs;
+// `outputs` of one file: names of the problem's outputs or derived quantities, distinct;
+// default the outputs.
+std::vector<std::string> PdeReference::file_outputs(const io::ConfigNode& node,
+                                                    const std::vector<std::string>& outputs) const {
+  if (!node.has("outputs")) return {outputs.begin(), outputs.begin() + defaults_};
   const auto names = node.get<std::vector<std::string>>("outputs");
   node.require("outputs", !names.empty(), "expected a non-empty list of output names");
   for (std::size_t k = 0; k < names.size(); ++k) {
@@ -155,8 +159,6 @@ std::vector<std::string> file_outputs(const io::ConfigNode& node, const std::vec
   }
   return names;
 }
-
-}  // namespace
 
 // One file: `file`, `columns` and `outputs` of `node` (see the header).
 void PdeReference::read_file(const io::ConfigNode& node, const std::vector<std::string>& all_outputs,

@@ -10,7 +10,8 @@
 //     file: data/heat.csv          # CSV with a header, a whitespace (COMSOL) table, or
 //                                  # "F.h5:/dataset" (io/point_table.h); relative to the config
 //     columns: {t: time, u: u_fd}  # variable or output → column name; default: the same name
-//     outputs: [u]                 # the outputs the file has; default: all of them
+//     outputs: [u]                 # the outputs the file has; default: all of them (not
+//                                  # the problem's `derived` quantities, which it may name)
 //   reference:                     # several files, each with the outputs it has
 //     file:
 //       - {file: data/ghia_re100_u_centreline.csv, outputs: [u]}
@@ -87,8 +88,11 @@ class PdeReference {
   using FieldValues = std::function<Eigen::MatrixXd(const Eigen::MatrixXd& x)>;  // n × outputs
 
   PdeReference() = default;
+  // `outputs`: the names a file may hold, of which the first `defaults` (all when 0) are
+  // what a file without `outputs` holds and what `exact` gives (the problem's outputs; the
+  // rest: its derived quantities).
   PdeReference(const io::ConfigNode& node, const Domain& domain, const std::vector<std::string>& outputs,
-               const PdeExpressions& expressions, const std::filesystem::path& config_dir);
+               const PdeExpressions& expressions, const std::filesystem::path& config_dir, std::size_t defaults = 0);
 
   // Values anywhere (an expression or a named solution).
   bool has_exact() const { return !exact_.empty() || burgers_.has_value(); }
@@ -105,13 +109,15 @@ class PdeReference {
   void read_named_solution(const io::ConfigNode& node, int outputs, const PdeExpressions& e);
   void read_files(const io::ConfigNode& node, const std::vector<std::string>& outputs,
                   const std::filesystem::path& config_dir);
+  std::vector<std::string> file_outputs(const io::ConfigNode& node, const std::vector<std::string>& outputs) const;
   void read_file(const io::ConfigNode& node, const std::vector<std::string>& outputs,
                  const std::filesystem::path& config_dir);
   void read_timed_columns(const io::PointTable& table, const ReferenceColumns& names, const Eigen::MatrixXd& space,
                           const std::vector<std::string>& outputs, ReferencePoints& file);
 
   Domain domain_{{0.0}, {1.0}};
-  int outputs_ = 0;
+  int outputs_ = 0;   // the names compared (outputs, derived quantities)
+  int defaults_ = 0;  // of which a file holds without `outputs`
   std::vector<io::CompiledExpression> exact_;
   std::optional<BurgersSineOptions> burgers_;
   std::vector<ReferencePoints> files_;

@@ -276,6 +276,37 @@ TEST(PdeReference, ListOfFilesEachWithSomeOutputs) {
   for (const auto& [key, value] : only_u) EXPECT_TRUE(key.find("_v") == std::string::npos) << key;
 }
 
+// `derived`: a file may hold an expression of the outputs' values and the coordinates
+// (here s = u + x v) as it holds an output; its figures are named after it.
+TEST(PdeReference, DerivedQuantitiesAreComparedAsOutputs) {
+  const fs::path dir = folder("derived");
+  const Eigen::MatrixXd p = grid_points(), e = exact_values(p);
+  const Eigen::VectorXd s = e.col(0) + p.col(0).cwiseProduct(e.col(1));
+  write_text(dir / "s.csv", "x,y,s\n" + rows_of(p, s));
+  const std::string head = std::string(kHead).replace(std::string(kHead).find("reference:"), 10,
+                                                      "derived: {s: \"u + x*v\"}\nreference:");
+  write_text(dir / "derived.yaml", head + "  file: s.csv\n  outputs: [s]\n");
+  const auto metrics = metrics_of(*load_run(dir / "derived.yaml", {}).problem);
+  const Eigen::MatrixXd f = field_values(p);
+  const Eigen::VectorXd fs_values = f.col(0) + p.col(0).cwiseProduct(f.col(1));
+  EXPECT_NEAR(metric(metrics, "max_abs_err_s"), (fs_values - s).cwiseAbs().maxCoeff(), 1e-15);
+  EXPECT_NEAR(metric(metrics, "rel_l2"), (fs_values - s).norm() / s.norm(), 1e-14);
+  EXPECT_GT(metric(metrics, "max_abs_err_s"), 0.01);
+  for (const auto& [key, value] : metrics) EXPECT_TRUE(key.find("_u") == std::string::npos) << key;
+
+  using testutil::expect_located_error;
+  const auto refused = [&](const std::string& name, const std::string& derived) {
+    const fs::path path = dir / (name + ".yaml");
+    write_text(path, std::string(kHead).replace(std::string(kHead).find("reference:"), 10, derived + "\nreference:") +
+                         "  file: s.csv\n  outputs: [s]\n");
+    return path;
+  };
+  expect_located_error(refused("clash", "derived: {u: \"v\"}"),
+                       {6, 14, "derived.u", "expected a new name of letters and digits (not an output"});
+  expect_located_error(refused("derivative", "derived: {s: \"u_x + v\"}"),
+                       {6, 15, "derived.s", "unknown symbol 'u_x'"});
+}
+
 TEST(PdeReference, RefusedListsAndOutputsAreLocated) {
   using testutil::expect_located_error;
   const fs::path dir = folder("refused_list");
