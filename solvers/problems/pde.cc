@@ -21,6 +21,8 @@
 //   # points give rel_l2 and max_abs_err per output and over all outputs in metrics.json;
 //   # or a solution the project computes: `solution: burgers_sine, nu: nu`, the Cole–Hopf
 //   # solution of u_t + u u_x = ν u_xx from −sin πx (solvers/problems/burgers_reference.h)
+//   derived: {u: "w + x*y"}           # expressions of the outputs' values and the coordinates
+//   # that reference files may hold as they hold outputs (configs/lid_driven_cavity.yaml)
 //
 // A residual item is a string or {expr, weight (≥ 0, default 1), name (default pde, pde_1,
 // …; residual_i for one with `on`), batch (the training.batch entry; default interior,
