@@ -239,8 +239,10 @@ class Pde final : public Problem {
     for (std::size_t c = 0; c < outputs_.size(); ++c)
       s.slots.emplace_back(outputs_[c], domain_.input_dim() + static_cast<int>(c));
     for (const std::string& name : node.keys()) {
-      const bool constant = std::any_of(constants_.begin(), constants_.end(), [&](const auto& c) { return c.first == name; });
-      node.require(name, is_name(name, false) && !contains(kReservedNames, name) && !contains(outputs_, name) && !constant,
+      const bool constant =
+          std::any_of(constants_.begin(), constants_.end(), [&](const auto& c) { return c.first == name; });
+      node.require(name,
+                   is_name(name, false) && !contains(kReservedNames, name) && !contains(outputs_, name) && !constant,
                    "expected a new name of letters and digits (not an output, constant, variable or function)");
       try {
         derived_.emplace_back(node.get<std::string>(name), s);

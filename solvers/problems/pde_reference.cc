@@ -166,7 +166,8 @@ void PdeReference::read_file(const io::ConfigNode& node, const std::vector<std::
   const std::vector<std::string> outputs = file_outputs(node, all_outputs);
   ReferencePoints file;
   for (const std::string& name : outputs)
-    file.outputs.push_back(static_cast<int>(std::find(all_outputs.begin(), all_outputs.end(), name) - all_outputs.begin()));
+    file.outputs.push_back(
+        static_cast<int>(std::find(all_outputs.begin(), all_outputs.end(), name) - all_outputs.begin()));
   const ReferenceColumns names = column_names(node, domain_.input_names(), outputs, all_outputs);
   std::string source = node.get<std::string>("file");
   if (std::filesystem::path(source).is_relative()) source = (config_dir / source).string();
