@@ -21,6 +21,8 @@
 //   # points give rel_l2 and max_abs_err per output and over all outputs in metrics.json;
 //   # or a solution the project computes: `solution: burgers_sine, nu: nu`, the Cole–Hopf
 //   # solution of u_t + u u_x = ν u_xx from −sin πx (solvers/problems/burgers_reference.h)
+//   derived: {u: "w + x*y"}           # expressions of the outputs' values and the coordinates
+//   # that reference files may hold as they hold outputs (configs/lid_driven_cavity.yaml)
 //
 // A residual item is a string or {expr, weight (≥ 0, default 1), name (default pde, pde_1,
 // …; residual_i for one with `on`), batch (the training.batch entry; default interior,
@@ -103,11 +105,12 @@ class Pde final : public Problem {
     equation.reject_unknown_keys();
     if (root.has("conditions")) read_condition_list(root.child("conditions"));
     check_terms();
+    if (root.has("derived")) read_derived(root.child("derived"));
     if (root.has("reference")) read_reference(root.child("reference"), context.config_dir);
     for (const auto& [name, value] : constants_)
       if (!contains(constants_used_, name))
         throw root.child("constants").error(name, "constant '" + name + "' is never used (by a residual, "
-                                                  "a condition, reference.exact or another constant)");
+                                                  "a condition, derived, reference.exact or another constant)");
   }
 
   const Domain& domain() const override { return domain_; }
@@ -150,20 +153,27 @@ class Pde final : public Problem {
   // reference.file: the error at its points, after every stage and in metrics.json.
   std::optional<double> reported_error(const OutputContext& context) const override {
     if (!reference_.has_points()) return std::nullopt;
-    return output_errors(context.values(reference_.points()), reference_.values()).all_rel_l2;
+    return reference_.errors(compared(context)).all_rel_l2;
   }
   void write_outputs(const OutputContext& context, std::vector<std::pair<std::string, double>>& metrics) const override {
     if (!reference_.has_points()) return;
-    const OutputErrors e = output_errors(context.values(reference_.points()), reference_.values());
+    const OutputErrors e = reference_.errors(compared(context));
+    const std::vector<std::string> names = compared_names();
     metrics.emplace_back("rel_l2", e.all_rel_l2);
     metrics.emplace_back("max_abs_err", e.all_max_abs);
-    for (std::size_t c = 0; outputs_.size() > 1 && c < outputs_.size(); ++c) {
-      metrics.emplace_back("rel_l2_" + outputs_[c], e.rel_l2[c]);
-      metrics.emplace_back("max_abs_err_" + outputs_[c], e.max_abs[c]);
+    std::string per_output;
+    for (std::size_t c = 0; names.size() > 1 && c < names.size(); ++c) {
+      if (e.points[c] == 0) continue;  // no file has this output
+      metrics.emplace_back("rel_l2_" + names[c], e.rel_l2[c]);
+      metrics.emplace_back("max_abs_err_" + names[c], e.max_abs[c]);
+      char line[96];
+      std::snprintf(line, sizeof line, "; %s: rel_l2 %.3e, max_abs_err %.3e", names[c].c_str(), e.rel_l2[c],
+                    e.max_abs[c]);
+      per_output += line;
     }
-    metrics.emplace_back("reference_points", static_cast<double>(reference_.points().rows()));
-    std::printf("reference.file, %ld points: rel_l2 %.3e, max_abs_err %.3e\n",
-                static_cast<long>(reference_.points().rows()), e.all_rel_l2, e.all_max_abs);
+    metrics.emplace_back("reference_points", static_cast<double>(reference_.point_count()));
+    std::printf("reference.file, %ld points: rel_l2 %.3e, max_abs_err %.3e%s\n",
+                static_cast<long>(reference_.point_count()), e.all_rel_l2, e.all_max_abs, per_output.c_str());
   }
 
  private:
@@ -223,6 +233,52 @@ class Pde final : public Problem {
       if (!contains(constants_used_, name)) constants_used_.push_back(name);
   }
 
+  // `derived: {u: "w + lift"}`: named expressions of the variables, the constants and the
+  // outputs' values (no derivatives), which reference files may hold as they hold outputs
+  // (the lid-driven cavity trains w = u − lift and is compared with Ghia's u).
+  void read_derived(const io::ConfigNode& node) {
+    node.require(node.is_map(), "expected a mapping of names to expressions of the variables, constants and outputs");
+    io::ExpressionScope s = scope(true);
+    for (std::size_t c = 0; c < outputs_.size(); ++c)
+      s.slots.emplace_back(outputs_[c], domain_.input_dim() + static_cast<int>(c));
+    for (const std::string& name : node.keys()) {
+      const bool constant =
+          std::any_of(constants_.begin(), constants_.end(), [&](const auto& c) { return c.first == name; });
+      node.require(name,
+                   is_name(name, false) && !contains(kReservedNames, name) && !contains(outputs_, name) && !constant,
+                   "expected a new name of letters and digits (not an output, constant, variable or function)");
+      try {
+        derived_.emplace_back(node.get<std::string>(name), s);
+      } catch (const io::ExpressionError& error) {
+        throw node.expression_error(name, error);
+      }
+      note_constants(derived_.back());
+      derived_names_.push_back(name);
+    }
+  }
+
+  // The outputs, then the derived quantities: what reference files are compared with.
+  std::vector<std::string> compared_names() const {
+    std::vector<std::string> names = outputs_;
+    names.insert(names.end(), derived_names_.begin(), derived_names_.end());
+    return names;
+  }
+  PdeReference::FieldValues compared(const OutputContext& context) const {
+    return [this, values = context.values](const Eigen::MatrixXd& x) -> Eigen::MatrixXd {
+      const Eigen::MatrixXd out = values(x);
+      if (derived_.empty()) return out;
+      Eigen::MatrixXd inputs(x.rows(), x.cols() + out.cols());
+      inputs << x, out;
+      Eigen::MatrixXd all(x.rows(), out.cols() + static_cast<Eigen::Index>(derived_.size()));
+      all.leftCols(out.cols()) = out;
+      std::vector<double> scratch;
+      for (std::size_t k = 0; k < derived_.size(); ++k)
+        derived_[k].evaluate<double>(x.rows(), inputs.data(), x.rows(),
+                                     all.col(out.cols() + static_cast<Eigen::Index>(k)).data(), scratch);
+      return all;
+    };
+  }
+
   // `conditions`: read once (solvers/conditions/condition_list.h); the residual items
   // compiled as the equation's residuals on faces are.
   void read_condition_list(const io::ConfigNode& node) {
@@ -271,7 +327,7 @@ class Pde final : public Problem {
       return constant_expression(parent, key,
                                  "constants: " + (constants_.empty() ? std::string("none") : constant_names()));
     };
-    reference_ = PdeReference(node, domain_, outputs_, e, config_dir);
+    reference_ = PdeReference(node, domain_, compared_names(), e, config_dir, outputs_.size());
   }
 
   std::string constant_names() const {
@@ -416,6 +472,8 @@ class Pde final : public Problem {
   std::vector<std::string> constants_used_;
   std::vector<ResidualSpec> residuals_;
   std::vector<LossTerm> conditions_;
+  std::vector<io::CompiledExpression> derived_;
+  std::vector<std::string> derived_names_;
   std::shared_ptr<const Ansatz> ansatz_;
   PdeReference reference_;
 };

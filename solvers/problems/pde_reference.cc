@@ -18,16 +18,20 @@ bool contains(const std::vector<std::string>& names, const std::string& name) {
 }  // namespace
 
 PdeReference::PdeReference(const io::ConfigNode& node, const Domain& domain, const std::vector<std::string>& outputs,
-                           const PdeExpressions& expressions, const std::filesystem::path& config_dir)
-    : domain_(domain) {
+                           const PdeExpressions& expressions, const std::filesystem::path& config_dir,
+                           std::size_t defaults)
+    : domain_(domain),
+      outputs_(static_cast<int>(outputs.size())),
+      defaults_(static_cast<int>(defaults > 0 ? defaults : outputs.size())) {
+  const std::vector<std::string> own(outputs.begin(), outputs.begin() + defaults_);
   const int given = (node.has("exact") ? 1 : 0) + (node.has("solution") ? 1 : 0) + (node.has("file") ? 1 : 0);
   node.require(given == 1, "expected one of exact, solution, file");
   if (node.has("solution"))
-    read_named_solution(node, static_cast<int>(outputs.size()), expressions);
+    read_named_solution(node, defaults_, expressions);
   else if (node.has("file"))
-    read_file(node, outputs, config_dir);
+    read_files(node, outputs, config_dir);
   else
-    read_exact(node, outputs, expressions);
+    read_exact(node, own, expressions);
   node.reject_unknown_keys();
 }
 
@@ -129,16 +133,18 @@ struct ReferenceColumns {
 
 namespace {
 
+// The columns of the variables, then of `outputs` (the file's); `columns` may name any of
+// `all` (the problem's outputs).
 ReferenceColumns column_names(const io::ConfigNode& node, const std::vector<std::string>& variables,
-                         const std::vector<std::string>& outputs) {
+                              const std::vector<std::string>& outputs, const std::vector<std::string>& all) {
   ReferenceColumns names{{}, std::nullopt, node};
   if (node.has("columns")) {
     names.columns = node.child("columns");
     names.columns->require(names.columns->is_map(), "expected a mapping of variable and output names to column names");
     for (const std::string& key : names.columns->keys())
-      if (!contains(variables, key) && !contains(outputs, key))
+      if (!contains(variables, key) && !contains(all, key))
         throw names.columns->error(key, "'" + key + "' is neither a variable nor an output (variables: " +
-                                            io::join(variables) + "; outputs: " + io::join(outputs) + ")");
+                                            io::join(variables) + "; outputs: " + io::join(all) + ")");
   }
   for (const auto* list : {&variables, &outputs})
     for (const std::string& name : *list)
@@ -148,10 +154,48 @@ ReferenceColumns column_names(const io::ConfigNode& node, const std::vector<std:
 
 }  // namespace
 
-// `file` and `columns`: see the header.
-void PdeReference::read_file(const io::ConfigNode& node, const std::vector<std::string>& outputs,
+// `file` one path or a list of {file, columns, outputs}: see the header.
+void PdeReference::read_files(const io::ConfigNode& node, const std::vector<std::string>& outputs,
+                              const std::filesystem::path& config_dir) {
+  if (!node.has_list("file")) return read_file(node, outputs, config_dir);
+  for (const char* key : {"columns", "outputs"})
+    node.require(key, !node.has(key), "with a list of files, each item takes its own columns and outputs");
+  const io::ConfigNode list = node.child("file");
+  list.require(list.size() > 0, "expected a path or a non-empty list of {file, columns, outputs}");
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const io::ConfigNode item = list.at(i);
+    item.require(item.is_map(), "expected a mapping {file, columns, outputs}");
+    read_file(item, outputs, config_dir);
+    item.reject_unknown_keys();
+  }
+}
+
+// `outputs` of one file: names of the problem's outputs or derived quantities, distinct;
+// default the outputs.
+std::vector<std::string> PdeReference::file_outputs(const io::ConfigNode& node,
+                                                    const std::vector<std::string>& outputs) const {
+  if (!node.has("outputs")) return {outputs.begin(), outputs.begin() + defaults_};
+  const auto names = node.get<std::vector<std::string>>("outputs");
+  node.require("outputs", !names.empty(), "expected a non-empty list of output names");
+  for (std::size_t k = 0; k < names.size(); ++k) {
+    node.require("outputs", contains(outputs, names[k]),
+                 "'" + names[k] + "' is no output (outputs: " + io::join(outputs) + ")");
+    node.require("outputs", std::find(names.begin(), names.begin() + static_cast<long>(k), names[k]) ==
+                                names.begin() + static_cast<long>(k),
+                 "'" + names[k] + "' is listed twice");
+  }
+  return names;
+}
+
+// One file: `file`, `columns` and `outputs` of `node` (see the header).
+void PdeReference::read_file(const io::ConfigNode& node, const std::vector<std::string>& all_outputs,
                              const std::filesystem::path& config_dir) {
-  const ReferenceColumns names = column_names(node, domain_.input_names(), outputs);
+  const std::vector<std::string> outputs = file_outputs(node, all_outputs);
+  ReferencePoints file;
+  for (const std::string& name : outputs)
+    file.outputs.push_back(
+        static_cast<int>(std::find(all_outputs.begin(), all_outputs.end(), name) - all_outputs.begin()));
+  const ReferenceColumns names = column_names(node, domain_.input_names(), outputs, all_outputs);
   std::string source = node.get<std::string>("file");
   if (std::filesystem::path(source).is_relative()) source = (config_dir / source).string();
   io::PointTable table;
@@ -179,15 +223,20 @@ void PdeReference::read_file(const io::ConfigNode& node, const std::vector<std::
   } catch (const io::TableError& e) {
     throw node.error("file", e.what());
   }
-  if (timed) return read_timed_columns(table, names, space, outputs);
-  points_ = space;
-  values_.resize(table.rows(), n_out);
-  for (int c = 0; c < n_out; ++c) values_.col(c) = names.read(table, static_cast<size_t>(d + c));
+  if (timed) {
+    read_timed_columns(table, names, space, outputs, file);
+  } else {
+    file.points = space;
+    file.values.resize(table.rows(), n_out);
+    for (int c = 0; c < n_out; ++c) file.values.col(c) = names.read(table, static_cast<size_t>(d + c));
+  }
+  files_.push_back(std::move(file));
 }
 
 // COMSOL layout: one column per output and time, every output at the same times.
 void PdeReference::read_timed_columns(const io::PointTable& table, const ReferenceColumns& names,
-                                      const Eigen::MatrixXd& space, const std::vector<std::string>& outputs) {
+                                      const Eigen::MatrixXd& space, const std::vector<std::string>& outputs,
+                                      ReferencePoints& file) {
   const int d = domain_.input_dim(), n_out = static_cast<int>(outputs.size());
   const auto [t0, t1] = domain_.time();
   std::vector<std::vector<io::TimedColumn>> timed;
@@ -211,14 +260,52 @@ void PdeReference::read_timed_columns(const io::PointTable& table, const Referen
     }
   }
   const Eigen::Index rows = table.rows(), frames = static_cast<Eigen::Index>(timed[0].size());
-  points_.resize(rows * frames, d);
-  values_.resize(rows * frames, n_out);
+  file.points.resize(rows * frames, d);
+  file.values.resize(rows * frames, n_out);
   for (Eigen::Index j = 0; j < frames; ++j) {
-    points_.middleRows(j * rows, rows).leftCols(space.cols()) = space;
-    points_.middleRows(j * rows, rows).col(domain_.time_column()).setConstant(timed[0][static_cast<size_t>(j)].time);
+    file.points.middleRows(j * rows, rows).leftCols(space.cols()) = space;
+    file.points.middleRows(j * rows, rows).col(domain_.time_column()).setConstant(timed[0][static_cast<size_t>(j)].time);
     for (int c = 0; c < n_out; ++c)
-      values_.middleRows(j * rows, rows).col(c) = table.values.col(timed[static_cast<size_t>(c)][static_cast<size_t>(j)].index);
+      file.values.middleRows(j * rows, rows).col(c) = table.values.col(timed[static_cast<size_t>(c)][static_cast<size_t>(j)].index);
   }
+}
+
+Eigen::Index PdeReference::point_count() const {
+  Eigen::Index n = 0;
+  for (const ReferencePoints& file : files_) n += file.points.rows();
+  return n;
+}
+
+// Per output, the squared errors and reference values of every file that has it, summed.
+OutputErrors PdeReference::errors(const FieldValues& field) const {
+  const std::size_t n_out = static_cast<std::size_t>(outputs_);
+  std::vector<double> error2(n_out, 0.0), norm2(n_out, 0.0);
+  OutputErrors e;
+  e.max_abs.assign(n_out, 0.0);
+  e.points.assign(n_out, 0);
+  for (const ReferencePoints& file : files_) {
+    const Eigen::MatrixXd values = field(file.points);
+    for (std::size_t k = 0; k < file.outputs.size(); ++k) {
+      const std::size_t c = static_cast<std::size_t>(file.outputs[k]);
+      const Eigen::VectorXd error = values.col(file.outputs[k]) - file.values.col(static_cast<Eigen::Index>(k));
+      error2[c] += error.squaredNorm();
+      norm2[c] += file.values.col(static_cast<Eigen::Index>(k)).squaredNorm();
+      e.max_abs[c] = std::max(e.max_abs[c], error.cwiseAbs().maxCoeff<Eigen::PropagateNaN>());
+      if (std::isnan(error.sum())) e.max_abs[c] = NAN;
+      e.points[c] += error.size();
+    }
+  }
+  const auto rel = [](double error, double norm) { return norm > 0 ? std::sqrt(error / norm) : std::sqrt(error); };
+  double all_error2 = 0, all_norm2 = 0;
+  for (std::size_t c = 0; c < n_out; ++c) {
+    e.rel_l2.push_back(e.points[c] > 0 ? rel(error2[c], norm2[c]) : NAN);
+    if (e.points[c] == 0) e.max_abs[c] = NAN;
+    all_error2 += error2[c];
+    all_norm2 += norm2[c];
+    if (e.points[c] > 0) e.all_max_abs = std::isnan(e.max_abs[c]) ? NAN : std::max(e.all_max_abs, e.max_abs[c]);
+  }
+  e.all_rel_l2 = rel(all_error2, all_norm2);
+  return e;
 }
 
 OutputErrors output_errors(const Eigen::MatrixXd& values, const Eigen::MatrixXd& reference) {
@@ -228,6 +315,7 @@ OutputErrors output_errors(const Eigen::MatrixXd& values, const Eigen::MatrixXd&
   for (Eigen::Index c = 0; c < error.cols(); ++c) {
     e.rel_l2.push_back(rel(error.col(c).norm(), reference.col(c).norm()));
     e.max_abs.push_back(error.col(c).cwiseAbs().maxCoeff<Eigen::PropagateNaN>());
+    e.points.push_back(error.rows());
   }
   e.all_rel_l2 = rel(error.norm(), reference.norm());
   e.all_max_abs = error.cwiseAbs().maxCoeff<Eigen::PropagateNaN>();

@@ -4,8 +4,9 @@
 // values as a CSV, a COMSOL-style whitespace table and an HDF5 dataset give the same
 // per-output and overall errors as reference.exact at those points; the COMSOL layout with
 // one column per output and time; column names from the config; metrics.json of a run;
-// every refused file located at its key with the table's message; and `solution:
-// allen_cahn` (the ETDRK4 solution at the config's coefficients) with its refused keys.
+// several files each with some of the outputs (the list form, `outputs`); every refused file
+// located at its key with the table's message; and `solution: allen_cahn` (the ETDRK4
+// solution at the config's coefficients) with its refused keys.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -228,6 +229,112 @@ TEST(PdeReference, ExactGivesGridErrorsPerOutput) {
   const double all = m["rel_l2"], u = m["rel_l2_u"], v = m["rel_l2_v"];
   EXPECT_LE(all, std::max(u, v));
   EXPECT_GE(all, std::min(u, v));
+}
+
+// Rows "x,y,VALUE" of one output.
+std::string rows_of(const Eigen::MatrixXd& p, const Eigen::VectorXd& values) {
+  std::string out;
+  char line[160];
+  for (Eigen::Index n = 0; n < p.rows(); ++n) {
+    std::snprintf(line, sizeof line, "%.17g,%.17g,%.17g\n", p(n, 0), p(n, 1), values(n));
+    out += line;
+  }
+  return out;
+}
+
+// u on the line x = 0.5, v on the line y = 1 (the cavity's centreline tables): one file
+// each, the list form. Each output's errors are those at its own file's points; the overall
+// rel_l2 pools the squared errors of both.
+TEST(PdeReference, ListOfFilesEachWithSomeOutputs) {
+  const fs::path dir = folder("list");
+  Eigen::MatrixXd pu(9, 2), pv(6, 2);
+  for (int k = 0; k < 9; ++k) pu.row(k) << 0.5, 2.0 * k / 8.0;
+  for (int k = 0; k < 6; ++k) pv.row(k) << k / 5.0, 1.0;
+  const Eigen::MatrixXd eu = exact_values(pu), ev = exact_values(pv);
+  write_text(dir / "u_line.csv", "# u along x = 0.5\nx,y,u\n" + rows_of(pu, eu.col(0)));
+  write_text(dir / "v_line.csv", "x,y,v_ref\n" + rows_of(pv, ev.col(1)));
+  write_text(dir / "list.yaml", std::string(kHead) +
+                                    "  file:\n    - {file: u_line.csv, outputs: [u]}\n"
+                                    "    - {file: v_line.csv, outputs: [v], columns: {v: v_ref}}\n");
+  const RunSetup setup = load_run(dir / "list.yaml", {});
+  const auto metrics = metrics_of(*setup.problem);
+  const OutputErrors u = output_errors(field_values(pu), eu), v = output_errors(field_values(pv), ev);
+  EXPECT_EQ(metric(metrics, "reference_points"), 15);
+  EXPECT_NEAR(metric(metrics, "max_abs_err_u"), u.max_abs[0], 1e-15);
+  EXPECT_NEAR(metric(metrics, "rel_l2_u"), u.rel_l2[0], 1e-14 * u.rel_l2[0]);
+  EXPECT_NEAR(metric(metrics, "max_abs_err_v"), v.max_abs[1], 1e-15);
+  EXPECT_NEAR(metric(metrics, "rel_l2_v"), v.rel_l2[1], 1e-14 * v.rel_l2[1]);
+  EXPECT_GT(u.max_abs[0], 0);
+  EXPECT_NE(u.max_abs[1], v.max_abs[1]);  // v at u's points would give another figure
+  const double error2 = (field_values(pu) - eu).col(0).squaredNorm() + (field_values(pv) - ev).col(1).squaredNorm();
+  const double norm2 = eu.col(0).squaredNorm() + ev.col(1).squaredNorm();
+  EXPECT_NEAR(metric(metrics, "rel_l2"), std::sqrt(error2 / norm2), 1e-14);
+  EXPECT_EQ(metric(metrics, "max_abs_err"), std::max(u.max_abs[0], v.max_abs[1]));
+
+  // One file with one output of two: no figures for the other.
+  write_text(dir / "one.yaml", std::string(kHead) + "  file: u_line.csv\n  outputs: [u]\n");
+  const auto only_u = metrics_of(*load_run(dir / "one.yaml", {}).problem);
+  EXPECT_EQ(metric(only_u, "rel_l2"), metric(only_u, "rel_l2_u"));
+  for (const auto& [key, value] : only_u) EXPECT_TRUE(key.find("_v") == std::string::npos) << key;
+}
+
+// `derived`: a file may hold an expression of the outputs' values and the coordinates
+// (here s = u + x v) as it holds an output; its figures are named after it.
+TEST(PdeReference, DerivedQuantitiesAreComparedAsOutputs) {
+  const fs::path dir = folder("derived");
+  const Eigen::MatrixXd p = grid_points(), e = exact_values(p);
+  const Eigen::VectorXd s = e.col(0) + p.col(0).cwiseProduct(e.col(1));
+  write_text(dir / "s.csv", "x,y,s\n" + rows_of(p, s));
+  const std::string head = std::string(kHead).replace(std::string(kHead).find("reference:"), 10,
+                                                      "derived: {s: \"u + x*v\"}\nreference:");
+  write_text(dir / "derived.yaml", head + "  file: s.csv\n  outputs: [s]\n");
+  const auto metrics = metrics_of(*load_run(dir / "derived.yaml", {}).problem);
+  const Eigen::MatrixXd f = field_values(p);
+  const Eigen::VectorXd fs_values = f.col(0) + p.col(0).cwiseProduct(f.col(1));
+  EXPECT_NEAR(metric(metrics, "max_abs_err_s"), (fs_values - s).cwiseAbs().maxCoeff(), 1e-15);
+  EXPECT_NEAR(metric(metrics, "rel_l2"), (fs_values - s).norm() / s.norm(), 1e-14);
+  EXPECT_GT(metric(metrics, "max_abs_err_s"), 0.01);
+  for (const auto& [key, value] : metrics) EXPECT_TRUE(key.find("_u") == std::string::npos) << key;
+
+  using testutil::expect_located_error;
+  const auto refused = [&](const std::string& name, const std::string& derived) {
+    const fs::path path = dir / (name + ".yaml");
+    write_text(path, std::string(kHead).replace(std::string(kHead).find("reference:"), 10, derived + "\nreference:") +
+                         "  file: s.csv\n  outputs: [s]\n");
+    return path;
+  };
+  expect_located_error(refused("clash", "derived: {u: \"v\"}"),
+                       {6, 14, "derived.u", "expected a new name of letters and digits (not an output"});
+  expect_located_error(refused("derivative", "derived: {s: \"u_x + v\"}"),
+                       {6, 15, "derived.s", "unknown symbol 'u_x'"});
+}
+
+TEST(PdeReference, RefusedListsAndOutputsAreLocated) {
+  using testutil::expect_located_error;
+  const fs::path dir = folder("refused_list");
+  write_text(dir / "u.csv", "x,y,u\n0,0,1\n");
+  const auto config = [&](const std::string& name, const std::string& reference) {
+    const fs::path path = dir / (name + ".yaml");
+    write_text(path, std::string(kHead) + reference);
+    return path;
+  };
+  expect_located_error(config("unknown_output", "  file: u.csv\n  outputs: [u, w]\n"),
+                       {8, 12, "reference.outputs", "'w' is no output (outputs: u, v)"});
+  expect_located_error(config("twice", "  file: u.csv\n  outputs: [u, u]\n"),
+                       {8, 12, "reference.outputs", "'u' is listed twice"});
+  expect_located_error(config("empty", "  file: u.csv\n  outputs: []\n"),
+                       {8, 12, "reference.outputs", "expected a non-empty list of output names"});
+  // Without `outputs`, every output is expected: the file lacks v.
+  expect_located_error(config("all_outputs", "  file:\n    - {file: u.csv}\n"),
+                       {8, 14, "reference.file[0].file", "no column 'v' (columns: x, y, u)"});
+  expect_located_error(config("second_item", "  file:\n    - {file: u.csv, outputs: [u]}\n    - {file: none.csv, outputs: [v]}\n"),
+                       {9, 14, "reference.file[1].file", (dir / "none.csv").string() + ": no such file"});
+  expect_located_error(config("not_a_map", "  file:\n    - u.csv\n"),
+                       {8, 7, "reference.file[0]", "expected a mapping {file, columns, outputs}"});
+  expect_located_error(config("outer_outputs", "  file:\n    - {file: u.csv, outputs: [u]}\n  outputs: [u]\n"),
+                       {9, 12, "reference.outputs", "with a list of files, each item takes its own columns and outputs"});
+  expect_located_error(config("item_key", "  file:\n    - {file: u.csv, outputs: [u], weight: 2}\n"),
+                       {8, 35, "reference.file[0].weight", "unknown key"});
 }
 
 TEST(PdeReference, RefusedFilesAreLocated) {
