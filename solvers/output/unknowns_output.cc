@@ -39,9 +39,10 @@ void write_unknowns_plot(const std::filesystem::path& path, const UnknownConstan
   std::vector<io::PlotPanel> panels;
   for (int i = 0; i < unknowns.count(); ++i) {
     io::PlotPanel panel;
-    panel.curves.push_back({steps, trajectory.values.col(i), {0.12f, 0.35f, 0.75f}});
+    // The truth first, so that the trajectory stays visible where it reaches it.
     if (const auto& truth = unknowns.items()[static_cast<std::size_t>(i)].truth)
       panel.curves.push_back({steps, Eigen::VectorXd::Constant(n, *truth), {0.95f, 0.5f, 0.1f}});
+    panel.curves.push_back({steps, trajectory.values.col(i), {0.12f, 0.35f, 0.75f}});
     panels.push_back(std::move(panel));
   }
   io::write_png(path, io::plot_curves(panels, 900, 240 * unknowns.count()));
