@@ -249,7 +249,10 @@ class Pde final : public Problem {
     }
     node.require("initial", std::isfinite(u.initial) && (!u.positive || u.initial > 0),
                  u.positive ? "expected an initial value > 0 (positive: true)" : "expected a finite initial value");
-    if (node.has("true")) u.truth = node.get<double>("true");
+    if (node.has("true")) {
+      u.truth = node.get<double>("true");
+      node.require("true", std::isfinite(*u.truth), "expected a finite number");
+    }
     if (node.has("lr")) {
       u.lr = node.get<double>("lr");
       node.require("lr", *u.lr > 0, "expected a learning rate > 0");
