@@ -25,6 +25,18 @@ class StreamResidual {
   // reads only point n's rows, the rows of point n then hold Σ_c r̄ₙ_c ∂r_c(xₙ)/∂outₙ.
   virtual void backward(Eigen::Index first, const StreamLayout& layout, const Streams<Scalar>& out,
                         const Matrix<Scalar>& r_bar, Streams<Scalar>& adjoint) const = 0;
+
+  // Trainable numbers the residual reads besides the field's outputs (an inverse problem's
+  // unknown constants, solvers/unknowns.h): how many (q, 0 for most residuals), and
+  // ∂r/∂c for the block's rows of r, (rows · components()) × q, row n·C + c for r_c of
+  // row n. Called like evaluate, from several threads at once.
+  virtual int extra_parameters() const { return 0; }
+  virtual void extra_jacobian(Eigen::Index first, const StreamLayout& layout, const Streams<Scalar>& out,
+                              Matrix<Scalar>& jacobian) const {
+    (void)first;
+    (void)layout;
+    jacobian.setZero(out.points * components(), 0);
+  }
 };
 
 }  // namespace nfield::autodiff

@@ -138,6 +138,14 @@ void Field<Scalar>::initialize() {
 }
 
 template <typename Scalar>
+void Field<Scalar>::set_extra_parameters(const std::vector<double>& values) {
+  const Eigen::Index n = network_.parameter_count();
+  extra_ = static_cast<Eigen::Index>(values.size());
+  parameters_.conservativeResize(n + extra_);
+  for (Eigen::Index i = 0; i < extra_; ++i) parameters_(n + i) = static_cast<Scalar>(values[static_cast<std::size_t>(i)]);
+}
+
+template <typename Scalar>
 void Field<Scalar>::begin_stage(int stage) {
   if (late_features_) late_features_->set_features_on(stage >= options_.encoding.from_stage);
 }
@@ -172,12 +180,20 @@ void Field<Scalar>::residuals_and_jacobian(const Scalar* theta, const autodiff::
                                            const autodiff::Batch<Scalar>& batch,
                                            const autodiff::StreamResidual<Scalar>& residual,
                                            Scalar* residuals, Scalar* jacobian) const {
+  // With extra parameters, the network's rows are written narrow and then spread to rows of
+  // parameter_count() (in place, from the last row back), zeros in the extra columns.
   if (scales_ == 1) {
     network_.residuals_and_jacobian(theta, layout, batch, residual, residuals, jacobian);
-    return;
+  } else {
+    const ScaleResidual<Scalar> scaled(residual, options_.output_dim, output_scale_);
+    network_.residuals_and_jacobian(theta, layout, batch, scaled, residuals, jacobian);
   }
-  const ScaleResidual<Scalar> scaled(residual, options_.output_dim, output_scale_);
-  network_.residuals_and_jacobian(theta, layout, batch, scaled, residuals, jacobian);
+  if (extra_ == 0 || !jacobian) return;
+  const Eigen::Index n = network_.parameter_count(), p = n + extra_;
+  for (Eigen::Index row = batch.points.rows() * residual.components() - 1; row >= 0; --row) {
+    std::copy_backward(jacobian + row * n, jacobian + row * n + n, jacobian + row * p + n);
+    std::fill(jacobian + row * p + n, jacobian + row * p + p, Scalar(0));
+  }
 }
 
 template <typename Scalar>
@@ -194,6 +210,7 @@ template <typename Other>
 Field<Other> Field<Scalar>::cast() const {
   Field<Other> other(options_, network_.options());
   other.parameters() = parameters_.template cast<Other>();
+  other.extra_ = extra_;
   return other;
 }
 

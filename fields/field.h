@@ -31,7 +31,16 @@ class Field {
   const FieldOptions& options() const { return options_; }
   int input_dim() const { return options_.input_dim; }
   int output_dim() const { return options_.output_dim; }
-  Eigen::Index parameter_count() const { return network_.parameter_count(); }
+  // θ as the optimizers see it: the network's parameters, then extra_parameters() trainable
+  // numbers the network does not read (an inverse problem's unknown constants,
+  // solvers/unknowns.h). The passes below read only the network's part; their gradient leaves
+  // the extra entries as they are and their Jacobian rows have zeros there, for the caller to
+  // fill. Checkpoints of the field (fields/field_io.h) keep the network's part only.
+  Eigen::Index parameter_count() const { return network_.parameter_count() + extra_; }
+  Eigen::Index network_parameter_count() const { return network_.parameter_count(); }
+  Eigen::Index extra_parameters() const { return extra_; }
+  // Appends `values` to θ (replacing extra entries already there).
+  void set_extra_parameters(const std::vector<double>& values);
 
   autodiff::Vector<Scalar>& parameters() { return parameters_; }
   const autodiff::Vector<Scalar>& parameters() const { return parameters_; }
@@ -99,6 +108,8 @@ class Field {
   Field<Other> cast() const;
 
  private:
+  template <typename>
+  friend class Field;
   FieldOptions options_;
   Eigen::MatrixXd encoding_matrix_;
   autodiff::Sequential<Scalar> network_;
@@ -106,6 +117,7 @@ class Field {
   fields::FeatureEncoding<Scalar>* late_features_ = nullptr;  // in network_; set if from_stage > 0
   int scales_ = 1, output_scale_ = 0;
   bool all_scales_ = false;
+  Eigen::Index extra_ = 0;
 };
 
 }  // namespace nfield::fields

@@ -17,6 +17,7 @@
 #include "fields/field_config.h"
 #include "io/config.h"
 #include "solvers/residual.h"
+#include "solvers/unknowns.h"
 
 namespace nfield::io {
 class H5Writer;
@@ -85,6 +86,10 @@ class Problem {
   // Hard conditions: the field's output is u = A + D·N (solvers/conditions/hard_constraints.h); loss
   // terms and outputs see u. Null when every condition is soft.
   virtual std::shared_ptr<const Ansatz> ansatz() const { return nullptr; }
+
+  // An inverse problem's unknown constants (solvers/unknowns.h), trained with the field; the
+  // problem's residuals read their current values. Null: none.
+  virtual std::shared_ptr<UnknownConstants> unknowns() const { return nullptr; }
 
   virtual bool has_exact() const { return false; }
   // Exact or reference solution at x (n × output_dim).

@@ -53,15 +53,25 @@ double ResidualLoss<Scalar>::evaluate(Eigen::Index first, const StreamLayout& la
   adjoint_d.points = out.points;
   adjoint_d.count = out.count;
   adjoint_d.data.setZero(out.data.rows(), out.data.cols());
+  const auto gather_extra = [&](const Eigen::MatrixXd& r_bar) {
+    if (!extra_ || residual_.extra_parameters() == 0) return;
+    Eigen::MatrixXd jacobian;
+    residual_.extra_jacobian(first, layout, out_d, jacobian);
+    // Rows of the Jacobian are point-major (n·C + c); r̄ is n × C.
+    const Eigen::MatrixXd r_bar_rows = r_bar.transpose();
+    extra_->add(first, jacobian.transpose() * Eigen::Map<const Eigen::VectorXd>(r_bar_rows.data(), r_bar_rows.size()));
+  };
   if (point_weights_) {
     const auto a = point_weights_->segment(first, out.points).array();
     const Eigen::MatrixXd r_bar = (2.0 * scale_) * (r.array().colwise() * a).matrix();
     residual_.backward(first, layout, out_d, r_bar, adjoint_d);
+    gather_extra(r_bar);
     adjoint.data += adjoint_d.data.template cast<Scalar>();
     return scale_ * (r.rowwise().squaredNorm().array() * a).sum();
   }
   const Eigen::MatrixXd r_bar = (2.0 * scale_) * r;
   residual_.backward(first, layout, out_d, r_bar, adjoint_d);
+  gather_extra(r_bar);
   adjoint.data += adjoint_d.data.template cast<Scalar>();
   return scale_ * r.squaredNorm();
 }
@@ -105,6 +115,17 @@ void ScaledResidual<Scalar>::backward(Eigen::Index first, const StreamLayout& la
   const Eigen::MatrixXd r_bar_d = scale_ * r_bar.template cast<double>();
   residual_.backward(first + offset_, layout, out_d, r_bar_d, adjoint_d);
   adjoint.data += adjoint_d.data.template cast<Scalar>();
+}
+
+template <typename Scalar>
+void ScaledResidual<Scalar>::extra_jacobian(Eigen::Index first, const StreamLayout& layout,
+                                            const Streams<Scalar>& out,
+                                            autodiff::Matrix<Scalar>& jacobian) const {
+  thread_local Streams<double> out_d;
+  to_double(out, out_d);
+  Eigen::MatrixXd j;
+  residual_.extra_jacobian(first + offset_, layout, out_d, j);
+  jacobian = (scale_ * j).template cast<Scalar>();
 }
 
 template class ScaledResidual<float>;

@@ -7,7 +7,9 @@
 #pragma once
 
 #include <functional>
+#include <map>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -80,6 +82,7 @@ struct TermPoints {
 struct LossTerm {
   std::string name;       // shown in progress lines and metrics.json ("pde", "dirichlet", …)
   std::string batch_key;  // the training.batch entry giving its size: interior, boundary, …
+                          // (empty: the term draws a fixed set of its own, measurements)
   double weight = 1.0;
   autodiff::StreamSpec spec;
   // Draws the points of a batch of `n` (points, or groups for a term over groups).
@@ -92,6 +95,29 @@ struct LossTerm {
   std::function<void(int stage)> begin_stage;
 };
 
+// The gradient of a loss with respect to its residuals' extra parameters (unknown constants,
+// Residual::extra_parameters), gathered from the blocks of one pass, which run on several
+// threads, and summed in the order of the blocks: a run stays repeatable bit for bit for a
+// given thread count, as the field's gradient is.
+class ExtraGradient {
+ public:
+  void add(Eigen::Index first, Eigen::VectorXd g) {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    blocks_[first] = std::move(g);
+  }
+  // Σ over the blocks added since the last clear (q entries).
+  Eigen::VectorXd sum(Eigen::Index q) const {
+    Eigen::VectorXd total = Eigen::VectorXd::Zero(q);
+    for (const auto& [first, g] : blocks_) total += g;
+    return total;
+  }
+  void clear() { blocks_.clear(); }
+
+ private:
+  std::mutex mutex_;
+  std::map<Eigen::Index, Eigen::VectorXd> blocks_;
+};
+
 // Adapts a residual on a point set to the autodiff StreamLoss: w/N Σ ‖r‖², r̄ = 2w r / N,
 // N the residual's rows (points, or groups).
 // With per-point weights aₙ (one per point of the set; causal training weights time slices
@@ -99,13 +125,16 @@ struct LossTerm {
 // the pass, never differentiated.
 // A pass over part of the set (one rank's share in data-parallel training) starts at row
 // `offset` of it: the residual and the point weights are read there, N stays the whole set's.
+// With `extra` (and a residual with extra parameters), each block also adds its
+// Σ r̄ · ∂r/∂c there.
 template <typename Scalar>
 class ResidualLoss final : public autodiff::StreamLoss<Scalar> {
  public:
   ResidualLoss(const Residual& residual, double weight, Eigen::Index total_points,
-               const Eigen::VectorXd* point_weights = nullptr, Eigen::Index offset = 0)
+               const Eigen::VectorXd* point_weights = nullptr, Eigen::Index offset = 0,
+               ExtraGradient* extra = nullptr)
       : residual_(residual), scale_(weight / static_cast<double>(total_points)),
-        point_weights_(point_weights), offset_(offset) {}
+        point_weights_(point_weights), offset_(offset), extra_(extra) {}
   double evaluate(Eigen::Index first, const StreamLayout& layout, const Streams<Scalar>& out,
                   Streams<Scalar>& adjoint) const override;
 
@@ -114,6 +143,7 @@ class ResidualLoss final : public autodiff::StreamLoss<Scalar> {
   double scale_;
   const Eigen::VectorXd* point_weights_;  // not owned; null: all 1
   Eigen::Index offset_;
+  ExtraGradient* extra_;  // not owned; null: not gathered
 };
 
 // Adapts a residual on a point set to autodiff::StreamResidual, scaled by √(w/N): the
@@ -130,6 +160,9 @@ class ScaledResidual final : public autodiff::StreamResidual<Scalar> {
                 autodiff::Matrix<Scalar>& r) const override;
   void backward(Eigen::Index first, const StreamLayout& layout, const Streams<Scalar>& out,
                 const autodiff::Matrix<Scalar>& r_bar, Streams<Scalar>& adjoint) const override;
+  int extra_parameters() const override { return residual_.extra_parameters(); }
+  void extra_jacobian(Eigen::Index first, const StreamLayout& layout, const Streams<Scalar>& out,
+                      autodiff::Matrix<Scalar>& jacobian) const override;
 
  private:
   const Residual& residual_;

@@ -16,6 +16,7 @@
 #include "fields/encoding_type.h"
 #include "fields/field_config.h"
 #include "fields/field_io.h"
+#include "solvers/output/unknowns_output.h"
 #include "fields/field_type.h"
 #include "io/atomic_write.h"
 #include "io/version.h"
@@ -141,12 +142,13 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
   if (!resume.empty()) {
     const io::H5Reader file(resume);
     const fields::Field<Scalar> saved = fields::load_field<Scalar>(file);
-    if (saved.parameter_count() != field.parameter_count())
+    if (saved.parameter_count() != field.network_parameter_count())
       throw std::runtime_error(resume.string() + ": its field has " +
                                std::to_string(saved.parameter_count()) +
                                " parameters, the config's has " +
-                               std::to_string(field.parameter_count()));
-    field.parameters() = saved.parameters();
+                               std::to_string(field.network_parameter_count()));
+    // The network's part; unknown constants (θ's tail) come back with the trainer's state.
+    field.parameters().head(saved.parameter_count()) = saved.parameters();
     trainer.load_state(file);
     setup.problem->load_state(file);
     if (root) {
@@ -315,6 +317,19 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
   }
   for (const auto& [key, value] : trainer.extra_metrics()) metrics[key] = value;
   for (const auto& [key, value] : extra) metrics[key] = value;
+  if (const UnknownConstants* unknowns = trainer.unknowns().constants()) {
+    UnknownTrajectory trajectory;
+    const auto& samples = trainer.unknowns().trajectory();
+    trajectory.values.resize(static_cast<Eigen::Index>(samples.size()), unknowns->count());
+    for (std::size_t s = 0; s < samples.size(); ++s) {
+      trajectory.steps.push_back(samples[s].step);
+      for (int i = 0; i < unknowns->count(); ++i)
+        trajectory.values(static_cast<Eigen::Index>(s), i) = samples[s].values[static_cast<std::size_t>(i)];
+    }
+    metrics["unknowns"] = unknowns_metrics(*unknowns, trajectory);
+    write_unknowns_plot(dir / "unknowns.png", *unknowns, trajectory);
+    std::printf("%s\n", unknowns_line(*unknowns).c_str());
+  }
   metrics["nfield_version"] = std::string(version());
   io::write_atomically(dir / "metrics.json", [&](const std::filesystem::path& p) {
     std::ofstream(p) << metrics.dump(2) << "\n";
@@ -343,7 +358,9 @@ void check_stage_sizes(const RunSetup& s) {
               Random rng(0);
               rows = 0;
               for (size_t k = 0; k < terms.size(); ++k) {
-                double points = static_cast<double>(s.training.batch.at(terms[k].batch_key));
+                double points = terms[k].batch_key.empty()
+                                    ? static_cast<double>(terms[k].sample(rng, 0).residual_rows())
+                                    : static_cast<double>(s.training.batch.at(terms[k].batch_key));
                 if (s.training.adaptive.enabled && static_cast<int>(k) == s.problem->residual_term())
                   points += static_cast<double>(s.training.adaptive.max_points);
                 *rows += points * terms[k].residual(terms[k].sample(rng, 1))->components();
@@ -430,6 +447,7 @@ RunSetup setup_run(io::ConfigNode root, const std::filesystem::path& config,
   // resolved config lists only those the problem draws.
   std::vector<std::string> batch_keys;
   for (const LossTerm& term : s.problem->loss_terms()) {
+    if (term.batch_key.empty()) continue;  // draws its own points (measurements)
     if (!s.training.batch.count(term.batch_key))
       throw s.root.child_or_empty("training").error(
           "batch", "needs an entry '" + term.batch_key + "' for the loss term '" + term.name + "'");

@@ -39,6 +39,13 @@
 // The constants are numbers in every expression of the config: residuals, reference.exact,
 // later constants and the conditions' values and coefficients. One no expression reads is an
 // error (a typo, as an unknown key is).
+//
+// Inverse problems (solvers/unknowns.h, solvers/problems/pde_data.h): a constant given as
+//   nu: {unknown: true, initial: 0.05, positive: true, true: 0.00318, lr: 1.0e-3}
+// (or bounds: [a, b]) is trained with the field; only residuals (of the equation and of
+// `type: residual` conditions) read it, as a slot whose current value is filled in at every
+// evaluation. `data:` adds the measurements' loss term. An unknown constant no residual reads
+// is a warning (the data alone cannot tell it); `true:` on a known constant is an error.
 // Limits: a residual reads at most 32 symbols; hard conditions (enforce: hard) take no
 // residual of order above 2.
 #include <algorithm>
@@ -54,6 +61,7 @@
 #include "solvers/conditions/condition_list.h"
 #include "solvers/conditions/conditions.h"
 #include "solvers/conditions/hard_constraints.h"
+#include "solvers/problems/pde_data.h"
 #include "solvers/problems/pde_reference.h"
 #include "solvers/problems/pde_residual.h"
 #include "solvers/problems/pde_streams.h"
@@ -86,6 +94,7 @@ struct ResidualSpec {
   std::vector<Face> faces;
   std::shared_ptr<const io::CompiledExpression> expression;
   std::shared_ptr<const std::vector<std::vector<SymbolTerm>>> symbols;
+  std::vector<int> unknown_reads;  // the unknown constant at each slot after the symbols
   autodiff::StreamSpec spec;
   std::optional<io::ConfigNode> node;  // for errors found later (hard conditions, duplicate names)
 };
@@ -107,11 +116,22 @@ class Pde final : public Problem {
     check_terms();
     if (root.has("derived")) read_derived(root.child("derived"));
     if (root.has("reference")) read_reference(root.child("reference"), context.config_dir);
+    if (root.has("data")) read_data(root.child("data"), context.config_dir);
     for (const auto& [name, value] : constants_)
       if (!contains(constants_used_, name))
         throw root.child("constants").error(name, "constant '" + name + "' is never used (by a residual, "
                                                   "a condition, derived, reference.exact or another constant)");
+    if (unknowns_) {
+      if (ansatz_)
+        throw root.child("constants").error("unknown constants take soft conditions only (enforce: soft)");
+      for (const UnknownConstant& u : unknowns_->items())
+        if (!contains(constants_used_, u.name))
+          std::fprintf(stderr, "%s\n", root.child("constants").child(u.name).error(
+              "warning: unknown constant '" + u.name + "' is read by no residual: nothing trains it").what());
+    }
   }
+
+  std::shared_ptr<UnknownConstants> unknowns() const override { return unknowns_; }
 
   const Domain& domain() const override { return domain_; }
   int output_dim() const override { return static_cast<int>(outputs_.size()); }
@@ -137,12 +157,14 @@ class Pde final : public Problem {
         term.sample = [domain, faces = r.faces](Random& rng, Eigen::Index n) {
           return domain->sample_faces(faces, rng, n);
         };
-      term.residual = [expression = r.expression, symbols = r.symbols](const TermPoints& points) {
-        return std::make_unique<ExpressionResidual>(expression, symbols, points.x);
+      term.residual = [expression = r.expression, symbols = r.symbols, unknowns = unknowns_,
+                       reads = r.unknown_reads](const TermPoints& points) {
+        return std::make_unique<ExpressionResidual>(expression, symbols, points.x, unknowns, reads);
       };
       terms.push_back(std::move(term));
     }
     terms.insert(terms.end(), conditions_.begin(), conditions_.end());
+    if (!data_.empty()) terms.push_back(data_.loss_term(domain_.input_dim()));
     return terms;
   }
 
@@ -203,6 +225,10 @@ class Pde final : public Problem {
           : contains(outputs_, name.substr(0, name.find('_'))) ? "reads as an output or its derivative"
                                                                 : "";
       if (!problem.empty()) throw node.error(name, "constant name '" + name + "' " + problem);
+      if (node.has_map(name)) {
+        read_unknown(node.child(name), name);
+        continue;
+      }
       const double value = constant_expression(
           node, name,
           "constants before this one: " + (constants_.empty() ? std::string("none") : constant_names()) +
@@ -210,6 +236,43 @@ class Pde final : public Problem {
       node.require(name, std::isfinite(value), "constant '" + name + "' is not finite");
       constants_.emplace_back(name, value);
     }
+  }
+
+  // `name: {unknown: true, initial, positive | bounds, true, lr}` (solvers/unknowns.h).
+  void read_unknown(const io::ConfigNode& node, const std::string& name) {
+    if (!node.get_or("unknown", false)) {
+      if (node.has("true"))
+        throw node.error("true", "'true' is the truth of an unknown constant; '" + name +
+                                     "' is known (give unknown: true, or the value itself)");
+      throw node.error("unknown", "a known constant is a number or an expression; a mapping declares an "
+                                  "unknown one: {unknown: true, initial: …}");
+    }
+    UnknownConstant u;
+    u.name = name;
+    u.initial = node.get<double>("initial");
+    u.positive = node.get_or("positive", false);
+    if (node.has("bounds")) {
+      const std::vector<double> b = node.get_list<double>("bounds", 2);
+      u.bounds = std::make_pair(b[0], b[1]);
+      node.require("bounds", b[0] < b[1], "expected [lower, upper] with lower < upper");
+      node.require("positive", !u.positive, "give positive or bounds, not both");
+      node.require("initial", u.initial > b[0] && u.initial < b[1],
+                   "expected an initial value strictly inside bounds [" + io::format_number(b[0]) + ", " +
+                       io::format_number(b[1]) + "]");
+    }
+    node.require("initial", std::isfinite(u.initial) && (!u.positive || u.initial > 0),
+                 u.positive ? "expected an initial value > 0 (positive: true)" : "expected a finite initial value");
+    if (node.has("true")) {
+      u.truth = node.get<double>("true");
+      node.require("true", std::isfinite(*u.truth), "expected a finite number");
+    }
+    if (node.has("lr")) {
+      u.lr = node.get<double>("lr");
+      node.require("lr", *u.lr > 0, "expected a learning rate > 0");
+    }
+    node.reject_unknown_keys();
+    unknown_items_.push_back(u);
+    unknowns_ = std::make_shared<UnknownConstants>(unknown_items_);
   }
 
   // The value of node[key], an expression of the constants read so far (`valid` names them in
@@ -330,6 +393,24 @@ class Pde final : public Problem {
     reference_ = PdeReference(node, domain_, compared_names(), e, config_dir, outputs_.size());
   }
 
+  // `data`: measurements (solvers/problems/pde_data.h).
+  void read_data(const io::ConfigNode& node, const std::filesystem::path& config_dir) {
+    PdeExpressions e;
+    e.compile = [this](const io::ConfigNode& parent, const std::string& key) {
+      try {
+        io::CompiledExpression compiled(parent.get<std::string>(key), scope(false));
+        note_constants(compiled);
+        return compiled;
+      } catch (const io::ExpressionError& error) {
+        throw parent.expression_error(key, error);
+      }
+    };
+    e.constant = [this](const io::ConfigNode& parent, const std::string& key) {
+      return constant_expression(parent, key, "constants: " + constant_names());
+    };
+    data_ = PdeData(node, domain_, outputs_, e, &reference_, config_dir);
+  }
+
   std::string constant_names() const {
     std::vector<std::string> names;
     for (const auto& [n, v] : constants_) names.push_back(n);
@@ -380,7 +461,11 @@ class Pde final : public Problem {
     std::vector<DerivativeSymbol> candidates;
     io::ExpressionScope s = scope(true);
     const int d = domain_.input_dim();
+    // Unknown constants resolve to slots d + kUnknownSlots + i until renumbered.
+    constexpr int kUnknownSlots = 1 << 16;
     s.resolve = [&](std::string_view name) -> std::optional<int> {
+      if (unknowns_ && unknowns_->index(std::string(name)) >= 0)
+        return d + kUnknownSlots + unknowns_->index(std::string(name));
       const auto symbol = parse_derivative_symbol(name, outputs_, domain_.input_names(), domain_.space_dim());
       if (!symbol) return std::nullopt;
       auto at = std::find(candidates.begin(), candidates.end(), *symbol);
@@ -396,12 +481,18 @@ class Pde final : public Problem {
       throw key ? node.expression_error(*key, e) : node.expression_error(e);
     }
     std::vector<DerivativeSymbol> symbols;
-    std::vector<int> slot(static_cast<std::size_t>(d) + candidates.size());
+    std::vector<int> slot(static_cast<std::size_t>(d + kUnknownSlots + (unknowns_ ? unknowns_->count() : 0)));
     for (int a = 0; a < d; ++a) slot[static_cast<std::size_t>(a)] = a;
     for (const io::SymbolUse& use : expression.symbols())
-      if (use.slot >= d) {
+      if (use.slot >= d && use.slot < d + kUnknownSlots) {
         slot[static_cast<std::size_t>(use.slot)] = d + static_cast<int>(symbols.size());
         symbols.push_back(candidates[static_cast<std::size_t>(use.slot - d)]);
+      }
+    for (const io::SymbolUse& use : expression.symbols())
+      if (use.slot >= d + kUnknownSlots) {
+        slot[static_cast<std::size_t>(use.slot)] = d + static_cast<int>(symbols.size() + r.unknown_reads.size());
+        r.unknown_reads.push_back(use.slot - d - kUnknownSlots);
+        if (!contains(constants_used_, use.name)) constants_used_.push_back(use.name);
       }
     expression.remap_slots(slot);
     r.expression = std::make_shared<const io::CompiledExpression>(std::move(expression));
@@ -476,6 +567,9 @@ class Pde final : public Problem {
   std::vector<std::string> derived_names_;
   std::shared_ptr<const Ansatz> ansatz_;
   PdeReference reference_;
+  std::vector<UnknownConstant> unknown_items_;
+  std::shared_ptr<UnknownConstants> unknowns_;  // null: none
+  PdeData data_;
 };
 
 }  // namespace

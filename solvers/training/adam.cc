@@ -4,6 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace nfield::solvers {
 
@@ -39,7 +40,13 @@ void Adam<Scalar>::step(Scalar* params, const Scalar* gradient, double learning_
   const Scalar step = static_cast<Scalar>(learning_rate / c1);
   const Scalar root_c2 = static_cast<Scalar>(std::sqrt(c2));
   const Scalar eps = static_cast<Scalar>(options_.epsilon);
+  std::vector<Scalar> before;
+  for (const auto& entry : rate_scales_) before.push_back(theta(entry.first));
   theta.array() -= step * m_.array() / (v_.array().sqrt() / root_c2 + eps);
+  for (std::size_t k = 0; k < rate_scales_.size(); ++k) {
+    const auto [i, scale] = rate_scales_[k];
+    theta(i) = before[k] - static_cast<Scalar>(learning_rate * scale / c1) * m_(i) / (std::sqrt(v_(i)) / root_c2 + eps);
+  }
 }
 
 template class Adam<float>;

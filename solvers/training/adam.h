@@ -7,6 +7,8 @@
 #pragma once
 
 #include <cstdint>
+#include <utility>
+#include <vector>
 
 #include "autodiff/streams.h"
 
@@ -31,6 +33,14 @@ class Adam {
   void step(Scalar* params, const Scalar* gradient, double learning_rate);
   void step(Scalar* params, const Scalar* gradient) { step(params, gradient, options_.learning_rate); }
 
+  // Parameter i steps at learning_rate · scale (an unknown constant's own `lr`,
+  // solvers/unknowns.h); the others at learning_rate. Not state: set from the config.
+  void set_rate_scale(Eigen::Index i, double scale) {
+    for (auto& entry : rate_scales_)
+      if (entry.first == i) return void(entry.second = scale);
+    rate_scales_.emplace_back(i, scale);
+  }
+
   const AdamOptions& options() const { return options_; }
   autodiff::Vector<Scalar>& first_moment() { return m_; }
   autodiff::Vector<Scalar>& second_moment() { return v_; }
@@ -43,6 +53,7 @@ class Adam {
   AdamOptions options_;
   autodiff::Vector<Scalar> m_, v_;
   std::int64_t t_ = 0;
+  std::vector<std::pair<Eigen::Index, double>> rate_scales_;
 };
 
 }  // namespace nfield::solvers

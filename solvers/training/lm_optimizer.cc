@@ -119,7 +119,7 @@ class LmOptimizer final : public OptimizerOf<LmOptimizer, LmStageOptions> {
       // Each segment is a new problem on its points, started at the radius the last ended
       // with (as the Ceres backend does).
       TermsNormalEquations<Scalar> problem(field, terms_of(stage), stage.communicator(),
-                                           lm_options.threads);
+                                           lm_options.threads, &stage.unknowns());
       const auto report = [&](const std::vector<double>& losses) {
         for (size_t k = 0; k < losses.size(); ++k) stage.set_term_loss(k, losses[k]);
       };
@@ -163,6 +163,9 @@ class LmOptimizer final : public OptimizerOf<LmOptimizer, LmStageOptions> {
   bool run_ceres(TrainingStage<Scalar>& stage) {
     // Each segment (see run_stage) is a new Ceres problem that starts from the trust-region
     // radius the last ended with, so the damping carries over.
+    if (stage.unknowns().active())
+      throw std::runtime_error("training stage " + std::to_string(stage.index() + 1) +
+                               " (lm, backend: ceres) cannot train unknown constants; use backend: own");
     const int segment = stage.segment_length(options.resample_every, false);
     fields::Field<Scalar>& field = stage.field();
     Eigen::VectorXd theta = field.parameters().template cast<double>();

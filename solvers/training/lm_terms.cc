@@ -85,13 +85,31 @@ void TermCost<Scalar>::evaluate_rows(const double* theta, double* residuals, dou
 template <typename Scalar>
 TermsNormalEquations<Scalar>::TermsNormalEquations(const fields::Field<Scalar>& network,
                                                    std::vector<LeastSquaresTerm<Scalar>> terms,
-                                                   Communicator& communicator, int threads)
-    : network_(network), terms_(std::move(terms)), communicator_(communicator), threads_(threads),
+                                                   Communicator& communicator, int threads,
+                                                   TrainedUnknowns<Scalar>* unknowns)
+    : network_(network), unknowns_(unknowns && unknowns->active() ? unknowns : nullptr), terms_(std::move(terms)), communicator_(communicator), threads_(threads),
       losses_at_iterate_(terms_.size(), NAN), losses_at_trial_(terms_.size(), NAN) {}
 
 template <typename Scalar>
 void TermsNormalEquations<Scalar>::set_theta(const Eigen::VectorXd& theta) {
   theta_ = theta.cast<Scalar>();
+  if (unknowns_) unknowns_->before_pass(theta_.data());
+}
+
+template <typename Scalar>
+void TermsNormalEquations<Scalar>::add_unknown_columns(const LeastSquaresTerm<Scalar>& term,
+                                                       const autodiff::Batch<Scalar>& batch,
+                                                       const ScaledResidual<Scalar>& residual, Eigen::Index m) {
+  if (!unknowns_ || residual.extra_parameters() == 0) return;
+  autodiff::Streams<Scalar> out;
+  network_.evaluate(theta_.data(), *term.layout, batch, out);
+  autodiff::Matrix<Scalar> columns;
+  residual.extra_jacobian(0, *term.layout, out, columns);
+  const Eigen::Index p = parameter_count(), n = network_.network_parameter_count();
+  const UnknownConstants& c = *unknowns_->constants();
+  for (Eigen::Index row = 0; row < m; ++row)
+    for (int i = 0; i < c.count(); ++i)
+      j_(row * p + n + i) = static_cast<Scalar>(static_cast<double>(columns(row, i)) * c.raw_derivative(i));
 }
 
 template <typename Scalar>
@@ -114,6 +132,7 @@ double TermsNormalEquations<Scalar>::add_term(std::size_t k, Eigen::MatrixXd* jt
     if (jtj) j_.resize(m * p);
     network_.residuals_and_jacobian(theta_.data(), *term.layout, batch, residual, r_.data(),
                                     jtj ? j_.data() : nullptr);
+    if (jtj) add_unknown_columns(term, batch, residual, m);
     const double* f = nullptr;
     const double* rows = nullptr;
     if constexpr (std::is_same_v<Scalar, double>) {

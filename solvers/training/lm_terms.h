@@ -19,7 +19,10 @@
 //                       order of additions only.
 //
 // Jacobian rows come from the reverse pass per point (Sequential::residuals_and_jacobian) in
-// the training scalar and are converted to double.
+// the training scalar and are converted to double. An inverse problem's unknown constants
+// (solvers/training/trained_unknowns.h) are the last columns of θ: their entries of each row,
+// ∂f/∂ρ = ∂f/∂c · dc/dρ, come from the residual's extra_jacobian over a forward pass of the
+// chunk (own backend only; the Ceres backend refuses them).
 #pragma once
 
 #include <ceres/cost_function.h>
@@ -32,6 +35,7 @@
 #include "solvers/residual.h"
 #include "solvers/training/communicator.h"
 #include "solvers/training/levenberg_marquardt.h"
+#include "solvers/training/trained_unknowns.h"
 
 namespace nfield::solvers {
 
@@ -76,9 +80,10 @@ template <typename Scalar>
 class TermsNormalEquations final : public NormalEquationsProblem {
  public:
   // `threads`: of the BLAS products (the field's passes use their own setting).
+  // `unknowns` (null: none) is kept in step with each θ evaluated.
   TermsNormalEquations(const fields::Field<Scalar>& network,
                        std::vector<LeastSquaresTerm<Scalar>> terms, Communicator& communicator,
-                       int threads);
+                       int threads, TrainedUnknowns<Scalar>* unknowns = nullptr);
 
   Eigen::Index parameter_count() const override { return network_.parameter_count(); }
   double cost(const Eigen::VectorXd& theta) override;
@@ -94,8 +99,12 @@ class TermsNormalEquations final : public NormalEquationsProblem {
   // Σ f² of term k's rows on this rank; with `jtj` and `jtf`, their sums added there too.
   double add_term(std::size_t k, Eigen::MatrixXd* jtj, Eigen::VectorXd* jtf);
   void set_theta(const Eigen::VectorXd& theta);
+  // The unknowns' columns of rows j_ (m rows of parameter_count()) of a chunk.
+  void add_unknown_columns(const LeastSquaresTerm<Scalar>& term, const autodiff::Batch<Scalar>& batch,
+                           const ScaledResidual<Scalar>& residual, Eigen::Index m);
 
   const fields::Field<Scalar>& network_;
+  TrainedUnknowns<Scalar>* unknowns_;
   std::vector<LeastSquaresTerm<Scalar>> terms_;
   Communicator& communicator_;
   int threads_;

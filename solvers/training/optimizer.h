@@ -34,6 +34,8 @@ namespace nfield::solvers {
 
 template <typename Scalar>
 class Trainer;
+template <typename Scalar>
+class TrainedUnknowns;
 
 // The trainer as one stage's optimizer sees it. Valid while the stage runs.
 template <typename Scalar>
@@ -43,6 +45,9 @@ class TrainingStage {
   int steps() const;          // the stage's steps
   int step() const;           // steps of it done (a resumed stage starts past 0)
   fields::Field<Scalar>& field();
+  // An inverse problem's unknown constants at θ's tail (solvers/training/trained_unknowns.h):
+  // what an optimizer that forms its own residuals (LM) needs to read and differentiate them.
+  TrainedUnknowns<Scalar>& unknowns();
 
   // The loss terms at their current points.
   std::size_t term_count() const;

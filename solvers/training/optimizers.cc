@@ -16,6 +16,7 @@
 #include "io/text.h"
 #include "solvers/training/adam.h"
 #include "solvers/training/ceres_stage.h"
+#include "solvers/training/trained_unknowns.h"
 
 namespace nfield::solvers {
 namespace {
@@ -79,6 +80,11 @@ class AdamOptimizer final : public OptimizerOf<AdamOptimizer, AdamStageOptions> 
   template <typename Scalar>
   bool run_stage(TrainingStage<Scalar>& stage) {
     Adam<Scalar>& adam = state<Scalar>(stage.field().parameter_count());
+    // Unknown constants with an `lr` of their own step at it (through the stage's schedule).
+    if (const UnknownConstants* unknowns = stage.unknowns().constants())
+      for (int i = 0; i < unknowns->count(); ++i)
+        if (const auto& lr = unknowns->items()[static_cast<std::size_t>(i)].lr)
+          adam.set_rate_scale(stage.field().network_parameter_count() + i, *lr / options.lr);
     stage.set_time_budget(options.seconds);
     fields::Field<Scalar>& field = stage.field();
     autodiff::Vector<Scalar> gradient(field.parameter_count());

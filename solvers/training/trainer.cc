@@ -65,12 +65,13 @@ Trainer<Scalar>::Trainer(const Problem& problem, fields::Field<Scalar>& field,
                          TrainingOptions options, Communicator* communicator)
     : problem_(problem), field_(field),
       communicator_(communicator ? *communicator : world_communicator()),
-      options_(std::move(options)), rng_(options_.seed) {
+      options_(std::move(options)), rng_(options_.seed),
+      unknowns_(problem.unknowns(), field, options_.total_steps()) {
   terms_ = with_ansatz(problem_.loss_terms(), problem_.ansatz());  // hard conditions: u = A + D·N
   for (const LossTerm& term : terms_) {
     names_.push_back(term.name);
     layouts_.emplace_back(term.spec);
-    if (!options_.batch.count(term.batch_key))
+    if (!term.batch_key.empty() && !options_.batch.count(term.batch_key))
       throw std::invalid_argument("training.batch has no entry '" + term.batch_key +
                                   "' for loss term '" + term.name + "'");
   }
@@ -106,7 +107,8 @@ void Trainer<Scalar>::set_points(size_t k) {
 template <typename Scalar>
 void Trainer<Scalar>::resample() {
   for (size_t k = 0; k < terms_.size(); ++k) {
-    points_[k] = sample(k, options_.batch.at(terms_[k].batch_key));
+    // A term with no batch key draws its own set (measurements: all of them, every step).
+    points_[k] = sample(k, terms_[k].batch_key.empty() ? 0 : options_.batch.at(terms_[k].batch_key));
     for (const auto& s : strategies_) s->points_drawn(k, points_[k]);
     set_points(k);
   }
@@ -126,11 +128,18 @@ double Trainer<Scalar>::term_loss(size_t k, const Scalar* params, double weight,
   for (const auto& s : strategies_)
     if ((point_weights = s->point_weights(k, points))) break;
   const bool tangents = tangents_scalar_[k].size() > 0;
+  // Unknown constants (trained_unknowns.h): read at params' tail, their gradient added to it.
+  unknowns_.before_pass(params);
+  const auto with_unknowns = [&](double loss) {
+    if (gradient) unknowns_.add_gradient(gradient);
+    return loss;
+  };
   if (!parallel()) {
-    const ResidualLoss<Scalar> loss(*residuals_[k], weight, points.residual_rows(), point_weights);
+    const ResidualLoss<Scalar> loss(*residuals_[k], weight, points.residual_rows(), point_weights, 0,
+                                    unknowns_.gradient_sink());
     const autodiff::Batch<Scalar> batch{points_scalar_[k],
                                         tangents ? &tangents_scalar_[k] : nullptr, points.groups};
-    return field_.value_and_gradient(params, layouts_[k], batch, loss, gradient);
+    return with_unknowns(field_.value_and_gradient(params, layouts_[k], batch, loss, gradient));
   }
   // This rank's residual rows, and the points they read: rows [first, first + count) of x.
   const Share share = share_of(points.residual_rows(), communicator_.rank(), communicator_.size());
@@ -145,12 +154,12 @@ double Trainer<Scalar>::term_loss(size_t k, const Scalar* params, double weight,
     for (Eigen::Index& g : groups) g -= first;
   }
   const ResidualLoss<Scalar> loss(*residuals_[k], weight, points.residual_rows(), point_weights,
-                                  first);
+                                  first, unknowns_.gradient_sink());
   autodiff::Matrix<Scalar> share_tangents;
   if (tangents) share_tangents = tangents_scalar_[k].middleRows(first, count);
   const autodiff::Batch<Scalar> batch{points_scalar_[k].middleRows(first, count),
                                       tangents ? &share_tangents : nullptr, groups};
-  return field_.value_and_gradient(params, layouts_[k], batch, loss, gradient);
+  return with_unknowns(field_.value_and_gradient(params, layouts_[k], batch, loss, gradient));
 }
 
 template <typename Scalar>
@@ -268,6 +277,7 @@ Progress Trainer<Scalar>::progress(double lr) const {
   p.term_losses = losses_;
   for (double l : losses_) p.loss += l;
   for (const auto& s : strategies_) s->progress(p.extras);
+  unknowns_.progress(p.extras);
   const double elapsed = now_seconds() - stage_started_;
   const long done = global_step_ - stage_started_step_;
   p.steps_per_second = elapsed > 0 ? done / elapsed : 0;
@@ -361,6 +371,7 @@ void Trainer<Scalar>::finish_step(double learning_rate, double milliseconds) {
     last_finite_step_ = global_step_;
     last_finite_losses_ = losses_;
   }
+  unknowns_.after_step(global_step_);
   if (callbacks_->progress) callbacks_->progress(progress(learning_rate));
   if (options_.checkpoint_every > 0 && global_step_ % options_.checkpoint_every == 0 &&
       callbacks_->checkpoint)
@@ -453,6 +464,7 @@ void Trainer<Scalar>::save_state(io::H5Writer& file) const {
   for (size_t k = 0; k < sequences_.size(); ++k)
     file.write_attribute("trainer", "sequence_" + std::to_string(k), sequences_[k].state());
   for (const auto& s : strategies_) s->save(file, "trainer");
+  unknowns_.save(file);
 }
 
 template <typename Scalar>
@@ -526,6 +538,7 @@ void Trainer<Scalar>::load_state(const io::H5Reader& file) {
       sequences_[k].set_state(file.read_attribute<std::string>("trainer", name));
   }
   for (const auto& s : strategies_) s->load(file, "trainer");
+  unknowns_.load(file);
 }
 
 template <typename Scalar>
@@ -536,6 +549,8 @@ template <typename Scalar>
 int TrainingStage<Scalar>::step() const { return trainer_.stage_step_; }
 template <typename Scalar>
 fields::Field<Scalar>& TrainingStage<Scalar>::field() { return trainer_.field_; }
+template <typename Scalar>
+TrainedUnknowns<Scalar>& TrainingStage<Scalar>::unknowns() { return trainer_.unknowns_; }
 template <typename Scalar>
 std::size_t TrainingStage<Scalar>::term_count() const { return trainer_.terms_.size(); }
 template <typename Scalar>

@@ -54,6 +54,7 @@
 #include "solvers/training/optimizer.h"
 #include "solvers/problem.h"
 #include "solvers/training/training_options.h"
+#include "solvers/training/trained_unknowns.h"
 #include "solvers/training/training_strategy.h"
 
 namespace nfield::solvers {
@@ -152,6 +153,8 @@ class Trainer {
   // The strategies' figures, for metrics.json, in their order.
   std::vector<std::pair<std::string, double>> extra_metrics() const;
   const Eigen::MatrixXd& points(size_t term) const { return points_[term].x; }
+  // The unknown constants' trajectory (inactive without unknowns).
+  const TrainedUnknowns<Scalar>& unknowns() const { return unknowns_; }
   // The strategy of type T (such as CausalWeighting<Scalar>), or null when the run has none.
   template <class T>
   const T* strategy() const {
@@ -232,6 +235,7 @@ class Trainer {
   long stage_started_step_ = 0;  // (or of the resumed part of it)
   std::vector<UnitSequence> sequences_;   // one per term (none for uniform sampling)
   TrainingStrategies<Scalar> strategies_;
+  TrainedUnknowns<Scalar> unknowns_;  // an inverse problem's unknown constants (θ's tail)
 };
 
 }  // namespace nfield::solvers
