@@ -58,6 +58,12 @@ void read_where(const io::ConfigNode& item, const Domain& domain, const Conditio
   if (domain.geometry()) {
     if (c.type == ConditionType::kPeriodic)
       throw item.error("type", "a periodic condition pairs faces of a box domain; this domain has a geometry");
+    // `on` is required, as on a box: a part, a non-empty list of parts, or boundary.
+    if (item.has_list("on"))
+      item.require("on", !item.get<std::vector<std::string>>("on").empty(),
+                   "expected a part name or a non-empty list of part names");
+    else
+      (void)item.get<std::string>("on");
     c.parts = geometry::read_selection(item, *domain.geometry());
     if (c.hard && c.parts->where)
       throw item.error("where", "a hard condition holds on whole parts (its φ is the distance to them); "

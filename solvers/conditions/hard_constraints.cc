@@ -463,7 +463,7 @@ std::shared_ptr<const Ansatz> read_ansatz(const std::vector<ConditionItem>& item
       if (value) time_scale = item.time_scale;
     } else {
       if (!dirichlet) {
-        dirichlet = Ansatz::Dirichlet{{}, std::nullopt, values};
+        dirichlet = Ansatz::Dirichlet{{}, values};
         dirichlet_item = item.node;
       } else if (texts(values) != texts(dirichlet->values)) {
         throw item.node.error("value", "hard Dirichlet conditions must all carry the same value (this "

@@ -160,9 +160,9 @@ class Ansatz {
  public:
   struct Dirichlet {
     std::vector<Face> faces;
-    // On a domain with a geometry: the parts instead of faces, D = φ of Geometry::distance.
-    std::optional<geometry::Selection> parts;
     std::vector<io::Expression> values;  // one per channel
+    // On a domain with a geometry: the parts instead of faces, D = φ of Geometry::distance.
+    std::optional<geometry::Selection> parts{};
   };
   struct Initial {
     std::vector<io::Expression> value;                    // u0, one per channel

@@ -135,7 +135,7 @@ TEST(GeometryProblem, ShortRunLowersTheErrorAndMetricsCountInsidePointsOnly) {
   ASSERT_TRUE(trainer.run({}));
   const GridMetrics after = grid_error(*setup.problem, evaluate, setup.output);
   std::printf("plate with two holes, 200 Adam steps: rel_l2 %.3e -> %.3e\n", before, after.rel_l2);
-  EXPECT_LT(after.rel_l2, before / 10);
+  EXPECT_LT(after.rel_l2, before / 10);  // measured: 0.41 -> 0.023 (seed 0, one thread)
 
   // The same sums by hand over the grid points inside the plate: equal, and different from
   // the sums over all of the bounding box's grid (the holes count there).
@@ -177,7 +177,7 @@ TEST(GeometryProblem, ShortPdeRunOnADiskLowersTheError) {
   ASSERT_TRUE(trainer.run({}));
   const double after = grid_error(*setup.problem, evaluate, setup.output).rel_l2;
   std::printf("heat on a disk, 150 Adam steps: rel_l2 %.3e -> %.3e\n", before, after);
-  EXPECT_LT(after, before / 3);
+  EXPECT_LT(after, before / 3);  // measured: 0.89 -> 0.014 (seed 0, one thread)
 }
 
 // u = g + φ N: g on the hard parts for any network, and only there.
@@ -213,6 +213,8 @@ TEST(GeometryProblem, RefusedInputsAreLocated) {
   };
   expect_located_error(write_config("unknown_part", with("{on: plate,", "{on: plat,")),
                        {13, 10, "conditions[0].on", "plate, left, right"});
+  expect_located_error(write_config("no_part", with("{on: plate,", "{on: [],")),
+                       {13, 10, "conditions[0].on", "non-empty list of part names"});
   expect_located_error(write_config("empty", with("radius: 0.25, name: left", "radius: 2, name: left")),
                        {4, 5, "domain.geometry", "the domain is empty"});
   expect_located_error(
