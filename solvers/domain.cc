@@ -62,7 +62,13 @@ Domain Domain::from_config(const io::ConfigNode& node, const std::filesystem::pa
     node.require(key, !node.has(key), std::string("a domain with a geometry takes no `") + key +
                                           "` (the geometry's bounding box is its box)");
   auto g = std::make_shared<const geometry::Geometry>(geometry::read_geometry(node.child("geometry"), config_dir));
-  return Domain(std::move(g), read_time(node));
+  const auto time = read_time(node);
+  try {
+    return Domain(std::move(g), time);
+  } catch (const std::invalid_argument& e) {
+    // A bounding box that rounding made flat (coordinates of 1e300 and a radius of 1).
+    throw node.error("geometry", std::string("the geometry's bounding box is not a box: ") + e.what());
+  }
 }
 
 Domain Domain::from_config(const io::ConfigNode& node) {
