@@ -15,6 +15,9 @@ namespace {
 
 double step(double x) { return x >= 0.0 ? 1.0 : 0.0; }
 double power(double base, double exponent) { return std::pow(base, exponent); }
+// Bessel functions of the first kind, J0 and J1 (the radial modes of a disk); J0' = −J1.
+double bessel_j0(double x) { return std::cyl_bessel_j(0.0, std::abs(x)); }
+double bessel_j1(double x) { return x < 0 ? -std::cyl_bessel_j(1.0, -x) : std::cyl_bessel_j(1.0, x); }
 
 bool is_identifier(std::string_view name) {
   auto alpha = [](char c) { return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || c == '_'; };
@@ -63,6 +66,8 @@ struct Expression::Shared {
       parser.DefineFun("pow", power);
       parser.DefineFun("heaviside", step);
       parser.DefineFun("step", step);
+      parser.DefineFun("besselj0", bessel_j0);
+      parser.DefineFun("besselj1", bessel_j1);
       for (std::size_t i = 0; i < variables.size(); ++i)
         parser.DefineVar(variables[i], &evaluator->values[i]);
       evaluator->constants.resize(constants.size());

@@ -6,7 +6,9 @@
 // Available: + - * / ^ (power), comparisons, `c ? a : b`; constants pi and e;
 // functions sin cos tan asin acos atan sinh cosh tanh asinh acosh atanh exp log (natural)
 // log2 log10 sqrt abs sign atan2(y, x) pow(a, b) min max sum avg, and
-// heaviside(x) = step(x) = (x >= 0 ? 1 : 0).
+// heaviside(x) = step(x) = (x >= 0 ? 1 : 0), besselj0(x) and besselj1(x) (J0 and J1, the
+// Bessel functions of the first kind, through std::cyl_bessel_j; not in
+// io::CompiledExpression, whose functions carry derivatives).
 //
 //   Expression source("2*pi^2*sin(pi*x)*sin(pi*y)");      // variables x, y, z, t
 //   Eigen::VectorXd f = source.evaluate(points);           // points: n x 2 -> z = t = 0

@@ -5,6 +5,7 @@
 
 #include "io/registry.h"
 #include "solvers/geometry/geometry.h"
+#include "solvers/geometry/geometry_config.h"
 
 namespace nfield::solvers {
 namespace {
@@ -46,7 +47,34 @@ void Domain::require_box(const char* what) const {
                            ": a domain with a geometry has parts, not box faces (sample_boundary)");
 }
 
+namespace {
+std::optional<std::pair<double, double>> read_time(const io::ConfigNode& node) {
+  if (!node.has("time")) return std::nullopt;
+  const auto t = node.get_list<double>("time", 2);
+  node.require("time", t[1] > t[0], "expected [t0, t1] with t1 > t0");
+  return std::pair{t[0], t[1]};
+}
+}  // namespace
+
+Domain Domain::from_config(const io::ConfigNode& node, const std::filesystem::path& config_dir) {
+  if (!node.has("geometry")) return from_config(node);
+  for (const char* key : {"lower", "upper"})
+    node.require(key, !node.has(key), std::string("a domain with a geometry takes no `") + key +
+                                          "` (the geometry's bounding box is its box)");
+  auto g = std::make_shared<const geometry::Geometry>(geometry::read_geometry(node.child("geometry"), config_dir));
+  const auto time = read_time(node);
+  try {
+    return Domain(std::move(g), time);
+  } catch (const std::invalid_argument& e) {
+    // A bounding box that rounding made flat (coordinates of 1e300 and a radius of 1).
+    throw node.error("geometry", std::string("the geometry's bounding box is not a box: ") + e.what());
+  }
+}
+
 Domain Domain::from_config(const io::ConfigNode& node) {
+  node.require("geometry", !node.has("geometry"),
+               "this problem takes a box domain (lower, upper); shapes (domain.geometry) work with "
+               "problem: poisson and problem: pde");
   const auto lower = node.get<std::vector<double>>("lower");
   node.require("lower", !lower.empty() && lower.size() <= 3, "expected a list of 1 to 3 numbers");
   const auto upper = node.get_list<double>("upper", lower.size());
@@ -54,13 +82,7 @@ Domain Domain::from_config(const io::ConfigNode& node) {
     node.require("upper", upper[i] > lower[i],
                  "upper[" + std::to_string(i) + "] must be greater than lower[" +
                      std::to_string(i) + "]");
-  std::optional<std::pair<double, double>> time;
-  if (node.has("time")) {
-    const auto t = node.get_list<double>("time", 2);
-    node.require("time", t[1] > t[0], "expected [t0, t1] with t1 > t0");
-    time = std::pair{t[0], t[1]};
-  }
-  return Domain(lower, upper, time);
+  return Domain(lower, upper, read_time(node));
 }
 
 Eigen::VectorXd Domain::input_lower() const {
@@ -209,6 +231,23 @@ geometry::Measure Domain::space_measure() const {
   double v = 1;
   for (int a = 0; a < space_dim(); ++a) v *= upper_[static_cast<size_t>(a)] - lower_[static_cast<size_t>(a)];
   return {v, 0, true};
+}
+
+Eigen::Array<bool, Eigen::Dynamic, 1> Domain::contains_rows(const Eigen::MatrixXd& points) const {
+  if (!geometry_) return Eigen::Array<bool, Eigen::Dynamic, 1>::Constant(points.rows(), true);
+  return geometry_->contains_rows(points.leftCols(space_dim()));
+}
+
+Eigen::MatrixXd Domain::boundary_normals(const Eigen::MatrixXd& points) const {
+  if (!geometry_) throw std::logic_error("Domain::boundary_normals: a box domain has face normals (normal)");
+  Eigen::MatrixXd n = Eigen::MatrixXd::Zero(points.rows(), input_dim());
+  for (Eigen::Index r = 0; r < points.rows(); ++r) {
+    geometry::Vec3 x = geometry::Vec3::Zero();
+    for (int a = 0; a < space_dim(); ++a) x(a) = points(r, a);
+    const geometry::Vec3 v = geometry_->normal(x);
+    for (int a = 0; a < space_dim(); ++a) n(r, a) = v(a);
+  }
+  return n;
 }
 
 }  // namespace nfield::solvers

@@ -16,11 +16,13 @@
 // uniform, from a one-dimensional stream of its own when a sequence is attached), the boundary
 // is sampled by named part with normals (sample_boundary), and the box's faces do not exist
 // (face, sample_face and sample_faces throw std::logic_error), so that code written for boxes
-// cannot silently sample the bounding box's faces. Not read from configs yet: the conditions
-// (`on:` part names), the ansatz (φ from Geometry::distance) and the grid outputs (an inside
-// mask) must learn about it first.
+// cannot silently sample the bounding box's faces. In a config it is `domain.geometry`
+// (solvers/geometry/geometry_config.h), read by from_config with the config's folder; the
+// conditions then name parts (condition_list.h), the hard ansatz takes φ from
+// Geometry::distance (hard_constraints.h), and the grid outputs mask the points outside.
 #pragma once
 
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <string>
@@ -51,8 +53,12 @@ class Domain {
   // A domain shaped by `geometry` (2-D or 3-D), optionally times [t0, t1].
   explicit Domain(std::shared_ptr<const geometry::Geometry> geometry,
                   std::optional<std::pair<double, double>> time = std::nullopt);
-  // Reads `domain:` {lower, upper, time}; errors name the file, line and key.
+  // Reads `domain:` {lower, upper, time}; errors name the file, line and key. A `geometry`
+  // key is refused (the problem takes boxes only).
   static Domain from_config(const io::ConfigNode& node);
+  // Reads `domain:` {lower, upper, time} or {geometry, time}; files of the geometry (meshes,
+  // polygons) are relative to config_dir.
+  static Domain from_config(const io::ConfigNode& node, const std::filesystem::path& config_dir);
 
   int space_dim() const { return static_cast<int>(lower_.size()); }
   bool has_time() const { return time_.has_value(); }
@@ -97,6 +103,10 @@ class Domain {
   BoundaryPoints sample_boundary(const geometry::Selection& selection, Random& rng, Eigen::Index n) const;
   // The space measure: the box's volume (exact), or the geometry's (exact or estimated).
   geometry::Measure space_measure() const;
+  // Per row of `points` (n × space_dim or input_dim): inside the domain (always, for a box).
+  Eigen::Array<bool, Eigen::Dynamic, 1> contains_rows(const Eigen::MatrixXd& points) const;
+  // Outward unit normals (n × input_dim, 0 in t) at boundary points of the geometry.
+  Eigen::MatrixXd boundary_normals(const Eigen::MatrixXd& points) const;
 
  private:
   double face_measure(const Face& face) const;

@@ -20,6 +20,7 @@
 #include "fields/field_type.h"
 #include "io/atomic_write.h"
 #include "io/version.h"
+#include "solvers/geometry/geometry.h"
 #include "solvers/output/grid_output.h"
 #include "solvers/conditions/hard_constraints.h"
 #include "solvers/training/progress_printer.h"
@@ -307,6 +308,13 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
     }
   }
   if (setup.problem->writes_grid_outputs()) metrics["residual_rms"] = grid.residual_rms;
+  if (setup.problem->domain().geometry()) {
+    // The measure of a shaped domain: exact for one primitive, else a Monte Carlo estimate.
+    const geometry::Measure m = setup.problem->domain().space_measure();
+    metrics["domain_measure"] = m.value;
+    metrics["domain_measure_std_error"] = m.std_error;
+    metrics["domain_measure_exact"] = m.exact;
+  }
   if (communicator.size() > 1) {
     metrics["mpi_ranks"] = communicator.size();
     // Sent by this rank into the step's sums (and stop flags, clock): the volume per step.

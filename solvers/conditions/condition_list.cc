@@ -5,6 +5,7 @@
 
 #include "io/text.h"
 #include "solvers/conditions/condition_values.h"
+#include "solvers/geometry/geometry_config.h"
 
 namespace nfield::solvers {
 
@@ -54,6 +55,21 @@ void read_where(const io::ConfigNode& item, const Domain& domain, const Conditio
            : type == "robin"    ? ConditionType::kRobin
            : type == "periodic" ? ConditionType::kPeriodic
                                 : ConditionType::kResidual;
+  if (domain.geometry()) {
+    if (c.type == ConditionType::kPeriodic)
+      throw item.error("type", "a periodic condition pairs faces of a box domain; this domain has a geometry");
+    // `on` is required, as on a box: a part, a non-empty list of parts, or boundary.
+    if (item.has_list("on"))
+      item.require("on", !item.get<std::vector<std::string>>("on").empty(),
+                   "expected a part name or a non-empty list of part names");
+    else
+      (void)item.get<std::string>("on");
+    c.parts = geometry::read_selection(item, *domain.geometry());
+    if (c.hard && c.parts->where)
+      throw item.error("where", "a hard condition holds on whole parts (its φ is the distance to them); "
+                                "name the parts in `on` or use enforce: soft");
+    return;
+  }
   c.faces = condition_faces(item, domain);
   if (c.type == ConditionType::kPeriodic) {
     std::vector<Face>& f = c.faces;

@@ -28,7 +28,14 @@
 // initial value/velocity only, every output given a value) makes it exact through the ansatz
 // instead, and then it takes no weight; `time_scale` belongs to a hard initial value.
 //
-// Refused with a located error: an unknown type, face or output; a periodic `on` that is not
+// On a domain with a geometry (domain.geometry) `on` names parts instead of faces: a
+// primitive's name, a list of them, or `boundary`, optionally narrowed by `where: "x < -0.49"`
+// (an expression over x, y(, z), nonzero on the points kept); the points are drawn on those
+// parts (Domain::sample_boundary) and ∂/∂n is along each point's own outward normal
+// (Domain::boundary_normals). Periodic items need a box; a hard item takes parts by name
+// only (its φ is the distance to the named parts, not to a `where` subset).
+//
+// Refused with a located error: an unknown type, face, part or output; a periodic `on` that is not
 // two opposite faces; hard enforcement where the problem or the type has none; `initial`
 // without a time interval; unknown keys.
 #pragma once
@@ -40,6 +47,7 @@
 #include "io/config.h"
 #include "io/expression.h"
 #include "solvers/domain.h"
+#include "solvers/geometry/geometry.h"
 
 namespace nfield::solvers {
 
@@ -51,6 +59,8 @@ struct ConditionItem {
   ConditionType type = ConditionType::kDirichlet;
   bool initial = false;     // at t0 (initial value, velocity, or a residual on: initial)
   std::vector<Face> faces;  // on faces; periodic: the lower face, then the upper one
+  // On a domain with a geometry: the parts (and `where`) instead of faces.
+  std::optional<geometry::Selection> parts;
   // The outputs the item constrains (channels, increasing), and per channel its value g
   // (set for those channels; not for periodic and residual items).
   std::vector<int> outputs;

@@ -38,7 +38,8 @@ Eigen::MatrixXd outward_normals(const Domain& d, const std::vector<Face>& faces,
 
 // a u + b ∂u/∂n − g (neumann: a absent, b = 1), from the gradient streams.
 std::unique_ptr<Residual> normal_residual(const ConditionItem& item, const Domain& d, const Eigen::MatrixXd& x) {
-  const Eigen::MatrixXd normal = outward_normals(d, item.faces, x);
+  const Eigen::MatrixXd normal =
+      item.parts ? Eigen::MatrixXd(d.boundary_normals(x).leftCols(d.space_dim())) : outward_normals(d, item.faces, x);
   const Eigen::VectorXd b = item.robin_b ? item.robin_b->evaluate(x) : Eigen::VectorXd::Ones(x.rows());
   std::vector<LinearResidual::Term> t;
   for (size_t k = 0; k < item.outputs.size(); ++k) {
@@ -73,9 +74,14 @@ LossTerm term_of(const ConditionItem& item, const Domain& domain) {
     return term;
   }
   term.batch_key = "boundary";
-  term.sample = [&domain, faces = item.faces](Random& rng, Eigen::Index n) {
-    return domain.sample_faces(faces, rng, n);
-  };
+  if (item.parts)
+    term.sample = [&domain, parts = *item.parts](Random& rng, Eigen::Index n) {
+      return domain.sample_boundary(parts, rng, n).points;
+    };
+  else
+    term.sample = [&domain, faces = item.faces](Random& rng, Eigen::Index n) {
+      return domain.sample_faces(faces, rng, n);
+    };
   switch (item.type) {
     case ConditionType::kDirichlet:
       term.name = "dirichlet";

@@ -161,10 +161,33 @@ std::vector<Jet> Ansatz::base_jets(const Eigen::MatrixXd& x, const std::vector<b
   return out;
 }
 
+namespace {
+// φ of the geometry's parts at the rows of x (space columns first; 0 derivatives in t).
+Jet distance_jet(const geometry::Geometry& g, const geometry::Selection& parts, const Eigen::MatrixXd& x, int d,
+                 bool second) {
+  Jet jet = Jet::constant(x.rows(), d, 0.0);
+  if (!second) jet.hessian.clear();
+  const int space = g.dim();
+  for (Eigen::Index r = 0; r < x.rows(); ++r) {
+    geometry::Vec3 p = geometry::Vec3::Zero();
+    for (int a = 0; a < space; ++a) p(a) = x(r, a);
+    const geometry::Scalar2 phi = g.distance(p, parts);
+    jet.value(r) = phi.v;
+    for (int a = 0; a < space; ++a) {
+      jet.gradient(r, a) = phi.g(a);
+      if (second)
+        for (int b = 0; b < space; ++b) jet.hessian[static_cast<size_t>(a * d + b)](r) = phi.h(a, b);
+    }
+  }
+  return jet;
+}
+}  // namespace
+
 Jet Ansatz::factor_jet(const Eigen::MatrixXd& x, bool second) const {
   const int d = domain_.input_dim();
   Jet jet = Jet::constant(x.rows(), d, 1.0);
   if (!second) jet.hessian.clear();
+  if (dirichlet_ && dirichlet_->parts) jet = jet * distance_jet(*domain_.geometry(), *dirichlet_->parts, x, d, second);
   if (dirichlet_)
     for (const Face& f : dirichlet_->faces) {
       const double lo = domain_.lower()[f.axis], hi = domain_.upper()[f.axis];
@@ -448,6 +471,16 @@ std::shared_ptr<const Ansatz> read_ansatz(const std::vector<ConditionItem>& item
                                            std::to_string(dirichlet_item->mark().line + 1) +
                                            "); make one of them soft");
       }
+      if (item.parts) {
+        // The union of the named parts; `boundary` (no names) is all of them.
+        if (!dirichlet->parts) dirichlet->parts = *item.parts;
+        else if (item.parts->parts.empty() || dirichlet->parts->parts.empty()) dirichlet->parts->parts.clear();
+        else
+          for (int p : item.parts->parts)
+            if (std::find(dirichlet->parts->parts.begin(), dirichlet->parts->parts.end(), p) ==
+                dirichlet->parts->parts.end())
+              dirichlet->parts->parts.push_back(p);
+      }
       for (const Face& f : item.faces)
         if (std::none_of(dirichlet->faces.begin(), dirichlet->faces.end(),
                          [&](const Face& g) { return g.axis == f.axis && g.upper == f.upper; }))
@@ -472,7 +505,8 @@ std::shared_ptr<const Ansatz> read_ansatz(const std::vector<ConditionItem>& item
             "value", "a hard Dirichlet value that depends on t cannot be combined with hard "
                      "initial conditions; make one of them soft");
     Random rng(0);
-    Eigen::MatrixXd x = domain.sample_faces(dirichlet->faces, rng, 256);
+    Eigen::MatrixXd x = dirichlet->parts ? domain.sample_boundary(*dirichlet->parts, rng, 256).points
+                                         : domain.sample_faces(dirichlet->faces, rng, 256);
     x.col(domain.time_column()).setConstant(domain.time().first);
     const Eigen::MatrixXd g = evaluate_channels(dirichlet->values, x);
     const Eigen::MatrixXd a = evaluate_channels(u0, x);

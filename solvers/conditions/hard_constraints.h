@@ -12,6 +12,9 @@
 //   Dirichlet on faces F (u = g):   A = g,   D = φ,   φ(x) = Π_{f∈F} ℓ_f(x),
 //       ℓ_f = (x_a − lower_a)/(upper_a − lower_a) on a lower face, (upper_a − x_a)/(…) on an
 //       upper one (normalized so φ ∈ [0, 1] and N keeps the scale of u).
+//   Dirichlet on parts P of a geometry (domain.geometry):  A = g,  D = φ_P(x), the
+//       R-function distance to those parts (solvers/geometry/geometry.h: Geometry::distance),
+//       0 on them, positive inside, ∂φ/∂n = −1 there, with its exact gradient and Hessian.
 //   Wave initial data (u(x,t0) = u0, u_t(x,t0) = v0), τ = t − t0, T = t1 − t0:
 //       A = u0(x) + τ v0(x),   D = ψ(τ)² with ψ = τ/T   (value only hard: A = u0, D = ψ)
 //   both:  A = u0 + τ v0,   D = φ(x) ψ(τ)².
@@ -93,6 +96,7 @@
 
 #include "io/config.h"
 #include "io/expression.h"
+#include "solvers/geometry/geometry.h"
 #include "solvers/residual.h"
 
 namespace nfield::solvers {
@@ -157,6 +161,8 @@ class Ansatz {
   struct Dirichlet {
     std::vector<Face> faces;
     std::vector<io::Expression> values;  // one per channel
+    // On a domain with a geometry: the parts instead of faces, D = φ of Geometry::distance.
+    std::optional<geometry::Selection> parts{};
   };
   struct Initial {
     std::vector<io::Expression> value;                    // u0, one per channel

@@ -251,6 +251,12 @@ int Geometry::orientation(const Node& node, int leaf) const {
 
 Scalar2 Geometry::distance(const Vec3& x) const { return psi(root_, variables(x)); }
 
+Vec3 Geometry::normal(const Vec3& x) const {
+  const Vec3 g = -psi(root_, variables(x)).g;
+  const double n = g.norm();
+  return n > 0 ? Vec3(g / n) : Vec3::Zero();
+}
+
 Scalar2 Geometry::distance(const Vec3& x, const Selection& selection) const {
   if (selection.where) throw std::invalid_argument("a distance function needs parts by name, not a `where` expression");
   const Coords c = variables(x);

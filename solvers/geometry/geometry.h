@@ -154,6 +154,11 @@ class Geometry {
   bool contains(const Vec3& x) const;
   Eigen::Array<bool, Eigen::Dynamic, 1> contains_rows(const Eigen::MatrixXd& points) const;  // n×d
 
+  // The outward unit normal at a point of ∂Ω: −∇ψ/|∇ψ| of the whole domain's ψ. On a leaf's
+  // boundary the R0 joins reduce ∇ψ to that leaf's ±∇ψ_ℓ (the other operand's terms cancel
+  // where it is nonzero), so this is the leaf's exact normal, flipped for holes; at corners
+  // (where two leaves meet, a set of measure zero) it is some average.
+  Vec3 normal(const Vec3& x) const;
   // ψ of the whole domain, or the ADF φ vanishing on `selection`'s parts (no `where`).
   Scalar2 distance(const Vec3& x) const;
   Scalar2 distance(const Vec3& x, const Selection& selection) const;

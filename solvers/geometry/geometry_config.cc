@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "solvers/geometry/geometry_config.h"
 
+#include <cmath>
 #include <map>
 #include <stdexcept>
 
@@ -29,7 +30,10 @@ void set_dim(const io::ConfigNode& n, Context& c, int dim, const std::string& wh
 Vec3 point(const io::ConfigNode& n, const std::string& key, int dim) {
   const auto v = n.get_list<double>(key, static_cast<size_t>(dim));
   Vec3 p = Vec3::Zero();
-  for (int i = 0; i < dim; ++i) p(i) = v[static_cast<size_t>(i)];
+  for (int i = 0; i < dim; ++i) {
+    p(i) = v[static_cast<size_t>(i)];
+    n.require(key, std::isfinite(p(i)), "expected finite numbers");
+  }
   return p;
 }
 
@@ -57,6 +61,7 @@ std::unique_ptr<Primitive> read_polygon(const io::ConfigNode& n, Context& c) {
     for (size_t i = 0; i < list.size(); ++i) {
       const auto xy = list.at(i).as<std::vector<double>>();
       list.at(i).require(xy.size() == 2, "expected a vertex [x, y]");
+      list.at(i).require(std::isfinite(xy[0]) && std::isfinite(xy[1]), "expected a vertex of finite numbers");
       v.row(static_cast<Eigen::Index>(i)) << xy[0], xy[1];
     }
   }
@@ -120,8 +125,14 @@ Similarity read_placement(const io::ConfigNode& n, const Context& c) {
   Similarity m;
   if (n.has("scale")) m.scale = n.get_positive<double>("scale");
   if (n.has("rotate")) {
-    if (c.dim == 2) m.rotation = Similarity::rotation_2d(n.get<double>("rotate"));
-    else m.rotation = Similarity::rotation_3d(point(n, "rotate", 3));
+    if (c.dim == 2) {
+      const double degrees = n.get<double>("rotate");
+      n.require("rotate", std::isfinite(degrees), "expected a finite angle in degrees");
+      m.rotation = Similarity::rotation_2d(degrees);
+    }
+    else {
+      m.rotation = Similarity::rotation_3d(point(n, "rotate", 3));
+    }
   }
   if (n.has("translate")) m.translation = point(n, "translate", c.dim);
   return m;

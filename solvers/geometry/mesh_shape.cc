@@ -227,8 +227,12 @@ Scalar2 MeshShape::distance(const Coords& x) const {
   double d2 = 0;
   locator_->cells->FindClosestPoint(point, closest, cell, sub, d2);
   const Vec3 p(point[0], point[1], point[2]), c(closest[0], closest[1], closest[2]);
-  const double d = std::sqrt(d2), sign = contains(p) ? 1.0 : -1.0;
-  const Vec3 g = d > 0 ? Vec3((p - c) / d) : Vec3(-normals_.row(cell).transpose());
+  // On the surface (up to rounding: a sampled boundary point's closest point differs from it
+  // by ~1e-16, whose direction is noise, and the parity test may say either) the gradient is
+  // the face's −n.
+  const double on_surface = 1e-12 * (bounds_.upper - bounds_.lower).norm();
+  const double d = std::sqrt(d2), sign = d <= on_surface || contains(p) ? 1.0 : -1.0;
+  const Vec3 g = d > on_surface ? Vec3((p - c) / d) : Vec3(-normals_.row(cell).transpose());
   // Which feature c lies on: the barycentric weights that vanish.
   const int f = static_cast<int>(cell);
   const Vec3 a = corner(mesh_, f, 0), b = corner(mesh_, f, 1), cc = corner(mesh_, f, 2);
@@ -242,10 +246,10 @@ Scalar2 MeshShape::distance(const Coords& x) const {
     else nonzero[nz++] = k;
   }
   Eigen::Matrix3d hess = Eigen::Matrix3d::Zero();
-  if (d > 0 && zeros == 1) {
+  if (d > on_surface && zeros == 1) {
     const Vec3 e = (corner(mesh_, f, nonzero[1]) - corner(mesh_, f, nonzero[0])).normalized();
     hess = (Eigen::Matrix3d::Identity() - e * e.transpose() - g * g.transpose()) / d;
-  } else if (d > 0 && zeros >= 2) {
+  } else if (d > on_surface && zeros >= 2) {
     hess = (Eigen::Matrix3d::Identity() - g * g.transpose()) / d;
   }
   // Compose with the derivatives the coordinates carry (a rotated or scaled mesh).

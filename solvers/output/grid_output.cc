@@ -118,7 +118,7 @@ GridMetrics grid_error(const Problem& problem, const StreamEvaluator& evaluate,
     const Eigen::MatrixXd x = frame_points(domain, space, k, frames, &t);
     const Eigen::MatrixXd exact = problem.exact(x);
     ErrorSums frame;
-    frame.add(values_at(evaluate, domain, x) - exact, exact, problem.error_mask(x));
+    frame.add(values_at(evaluate, domain, x) - exact, exact, problem.error_mask(x) && domain.contains_rows(x));
     sums.merge(frame);
     if (domain.has_time()) {
       metrics.frame_rel_l2.push_back(frame.rel_l2());
@@ -155,14 +155,25 @@ GridMetrics write_grid_outputs(const Problem& problem, const StreamEvaluator& ev
   for (int k = 0; k < frames; ++k) {
     double t;
     const Eigen::MatrixXd x = frame_points(domain, space, k, frames, &t);
+    // A shaped domain: the grid covers its bounding box; points outside are masked (`inside`
+    // = 0) and every array there is NaN, which ParaView leaves blank (threshold on `inside`).
+    const Eigen::Array<bool, Eigen::Dynamic, 1> inside = domain.contains_rows(x);
+    const bool shaped = domain.geometry() != nullptr;
+    const auto blank = [&](Eigen::MatrixXd m) {
+      if (shaped)
+        for (Eigen::Index i = 0; i < m.rows(); ++i)
+          if (!inside(i)) m.row(i).setConstant(std::numeric_limits<double>::quiet_NaN());
+      return m;
+    };
     io::PointArrays arrays;
+    if (shaped) arrays["inside"] = inside.cast<double>().matrix();
     const autodiff::Streams<double> streams = evaluate(gradient_layout, x);
-    const Eigen::MatrixXd u = values_at(evaluate, domain, x);
+    const Eigen::MatrixXd u = blank(values_at(evaluate, domain, x));
     for (int c = 0; c < channels; ++c) {
       arrays[names[c]] = u.col(c);
       Eigen::MatrixXd g(n, d);
       for (int a = 0; a < d; ++a) g.col(a) = streams.stream(1 + a).col(c);
-      arrays["grad_" + names[c]] = as_vtk_vector(g);
+      arrays["grad_" + names[c]] = blank(as_vtk_vector(g));
     }
     if (channels == 2) arrays["abs_u"] = u.rowwise().norm();
     if (scales && scales->scales > 1 && scales->scale_values)
@@ -176,16 +187,19 @@ GridMetrics write_grid_outputs(const Problem& problem, const StreamEvaluator& ev
       const auto residual = term.residual(x);
       Eigen::MatrixXd r;
       residual->evaluate(0, layout, evaluate(layout, x), r);
-      arrays["residual"] = r;
-      residual_sq += r.squaredNorm();
-      residual_count += r.rows();
+      for (Eigen::Index i = 0; i < r.rows(); ++i)
+        if (inside(i)) {
+          residual_sq += r.row(i).squaredNorm();
+          ++residual_count;
+        }
+      arrays["residual"] = blank(r);
     }
     std::map<std::string, double, std::less<>> field_data;
     if (problem.has_exact()) {
       const Eigen::MatrixXd exact = problem.exact(x);
-      const Eigen::MatrixXd error = u - exact;
+      const Eigen::MatrixXd error = u - exact;  // NaN outside a shaped domain, not summed
       ErrorSums frame;
-      frame.add(error, exact, problem.error_mask(x));
+      frame.add(error, exact, problem.error_mask(x) && inside);
       sums.merge(frame);
       if (domain.has_time()) {
         metrics.frame_rel_l2.push_back(frame.rel_l2());
@@ -193,7 +207,7 @@ GridMetrics write_grid_outputs(const Problem& problem, const StreamEvaluator& ev
         field_data["rel_l2"] = frame.rel_l2();
       }
       for (int c = 0; c < channels; ++c) {
-        arrays["exact_" + names[c]] = exact.col(c);
+        arrays["exact_" + names[c]] = blank(exact.col(c));
         arrays["error_" + names[c]] = error.col(c);
       }
       metrics.has_error = true;
@@ -214,7 +228,12 @@ GridMetrics write_grid_outputs(const Problem& problem, const StreamEvaluator& ev
       Eigen::MatrixXd image(ny, nx);
       for (int j = 0; j < ny; ++j)
         for (int i = 0; i < nx; ++i) image(ny - 1 - j, i) = u(slice + i + nx * j, 0);
-      io::write_scalar_png(output.dir / "solution.png", image, {std::nullopt, io::Colormap::kViridis});
+      io::Image picture = io::colorize(image, {std::nullopt, io::Colormap::kViridis});
+      // Outside a shaped domain (NaN): white, not the colormap's low end.
+      for (int r = 0; r < ny; ++r)
+        for (int c = 0; c < nx; ++c)
+          if (!std::isfinite(image(r, c))) picture.pixels.row(r * nx + c).setOnes();
+      io::write_png(output.dir / "solution.png", picture);
     }
   }
   if (domain.has_time()) pvd.write();

@@ -61,6 +61,7 @@
 #include "solvers/conditions/condition_list.h"
 #include "solvers/conditions/conditions.h"
 #include "solvers/conditions/hard_constraints.h"
+#include "solvers/geometry/geometry_config.h"
 #include "solvers/problems/pde_data.h"
 #include "solvers/problems/pde_reference.h"
 #include "solvers/problems/pde_residual.h"
@@ -92,6 +93,7 @@ struct ResidualSpec {
   double weight = 1;
   Where where = Where::kInterior;
   std::vector<Face> faces;
+  std::optional<geometry::Selection> parts;  // instead of faces on a domain with a geometry
   std::shared_ptr<const io::CompiledExpression> expression;
   std::shared_ptr<const std::vector<std::vector<SymbolTerm>>> symbols;
   std::vector<int> unknown_reads;  // the unknown constant at each slot after the symbols
@@ -102,7 +104,7 @@ struct ResidualSpec {
 class Pde final : public Problem {
  public:
   explicit Pde(const ProblemContext& context)
-      : domain_(Domain::from_config(context.root.child("domain"))) {
+      : domain_(Domain::from_config(context.root.child("domain"), context.config_dir)) {
     const io::ConfigNode& root = context.root;
     read_outputs(root);
     read_constants(root);
@@ -153,6 +155,10 @@ class Pde final : public Problem {
         term.sample = [domain](Random& rng, Eigen::Index n) { return domain->sample_interior(rng, n); };
       else if (r.where == ResidualSpec::Where::kInitial)
         term.sample = [domain](Random& rng, Eigen::Index n) { return domain->sample_initial(rng, n); };
+      else if (r.parts)
+        term.sample = [domain, parts = *r.parts](Random& rng, Eigen::Index n) {
+          return domain->sample_boundary(parts, rng, n).points;
+        };
       else
         term.sample = [domain, faces = r.faces](Random& rng, Eigen::Index n) {
           return domain->sample_faces(faces, rng, n);
@@ -362,6 +368,7 @@ class Pde final : public Problem {
       r.batch_key = item.initial ? "initial" : "boundary";
       r.name = (item.initial ? "initial_residual" : "boundary_residual") + suffix;
       r.faces = item.faces;
+      r.parts = item.parts;
       compile_residual(item.residual, item.node, "residual", r);
       residuals_.push_back(std::move(r));
     }
@@ -535,7 +542,8 @@ class Pde final : public Problem {
       r.batch_key = "initial";
       return;
     }
-    r.faces = condition_faces(item, domain_);
+    if (domain_.geometry()) r.parts = geometry::read_selection(item, *domain_.geometry());
+    else r.faces = condition_faces(item, domain_);
     r.where = ResidualSpec::Where::kFaces;
     r.batch_key = "boundary";
   }

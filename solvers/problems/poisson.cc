@@ -16,7 +16,7 @@ namespace {
 class Poisson final : public Problem {
  public:
   explicit Poisson(const ProblemContext& context)
-      : domain_(Domain::from_config(context.root.child("domain"))) {
+      : domain_(Domain::from_config(context.root.child("domain"), context.config_dir)) {
     const io::ConfigNode equation = context.root.child("equation");
     const auto vars = domain_.expression_variables();
     source_ = std::make_shared<io::Expression>(equation.get_expression("source", vars));

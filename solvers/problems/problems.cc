@@ -1,6 +1,10 @@
 // SPDX-License-Identifier: MIT
 #include "solvers/problems/problems.h"
 
+#include <algorithm>
+
+#include "io/text.h"
+
 namespace nfield::solvers {
 
 void register_problems(Registry<ProblemFactory>& registry) {
@@ -18,6 +22,9 @@ void register_problems(Registry<ProblemFactory>& registry) {
 }
 
 namespace {
+const std::vector<std::string> kBuiltIn = {"poisson", "poisson_image", "wave",        "helmholtz", "eikonal", "sdf",
+                                           "nerf",    "autoint_1d",    "autoint_nerf", "fit",       "pde"};
+
 Registry<ProblemFactory>& problems() {
   static Registry<ProblemFactory> registry = [] {
     Registry<ProblemFactory> r("problem");
@@ -37,6 +44,14 @@ std::unique_ptr<Problem> make_problem(const ProblemContext& context) {
   if (!problems().contains(name))
     throw context.root.error("problem", "unknown problem '" + name + "' (valid: " +
                                             problems().joined_names() + ")");
+  // The built-in problems that take shapes: poisson and pde (the others read
+  // Domain::from_config without a folder, which refuses `geometry` without naming them).
+  const io::ConfigNode domain = context.root.child_or_empty("domain");
+  const std::string lower = io::to_lower(name);
+  if (domain.is_map() && domain.has("geometry") && lower != "poisson" && lower != "pde" &&
+      std::find(kBuiltIn.begin(), kBuiltIn.end(), lower) != kBuiltIn.end())
+    throw domain.error("geometry", "problem: " + name + " takes a box domain (lower, upper); shapes "
+                                   "(domain.geometry) work with problem: poisson and problem: pde");
   return problems().at(name)(context);
 }
 
