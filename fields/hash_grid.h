@@ -96,6 +96,12 @@ struct HashGridLevel {
 // The levels for validated options and input dimension d.
 std::vector<HashGridLevel> hash_grid_levels(const EncodingOptions& options, int input_dim);
 
+namespace hash_grid_detail {
+template <typename Scalar>
+struct Cell;     // one point's cell at one level (hash_grid_cell.h)
+struct Offsets;  // where each input stream sits in a point's gathered inputs
+}  // namespace hash_grid_detail
+
 template <typename Scalar>
 class HashGridEncoding final : public autodiff::Module<Scalar> {
  public:
@@ -131,8 +137,8 @@ class HashGridEncoding final : public autodiff::Module<Scalar> {
   std::uint32_t row(int level, const int* vertex) const;
 
  private:
-  struct Cell;     // one point's cell at one level (hash_grid_cell.h)
-  struct Offsets;  // where each input stream sits in a point's gathered inputs
+  using Cell = hash_grid_detail::Cell<Scalar>;
+  using Offsets = hash_grid_detail::Offsets;
   struct Level {
     HashGridLevel info;
     Scalar scale[4];          // ∂t_j/∂x_j = N_l / (upper_j − lower_j)

@@ -5,7 +5,7 @@
 
 #include <cstdint>
 
-#include "fields/hash_grid.h"
+#include "autodiff/streams.h"
 
 namespace nfield::fields {
 namespace hash_grid_detail {
@@ -38,30 +38,27 @@ void series_product_adjoint(const Scalar* out_bar, const Scalar* b, Scalar* a_ba
 inline int tap(int v, int j, int bits) { return (v >> (j * bits)) & ((1 << bits) - 1); }
 
 // Derivative of order `order` of corner v's factor on axis j.
-template <typename Cell>
-auto factor(const Cell& cell, int v, int j, int order, int bits) {
+template <typename CellT>
+auto factor(const CellT& cell, int v, int j, int order, int bits) {
   return cell.w[j][tap(v, j, bits)][order];
 }
 
-}  // namespace hash_grid_detail
-
 template <typename Scalar>
-struct HashGridEncoding<Scalar>::Cell {
+struct Cell {
   // Corner v's tap on axis j is digit j of v in base taps (bits j·b … j·b + b − 1, b = log2
   // taps): vertex c_j + tap (linear, smoothstep) or c_j − 1 + tap (cubic).
-  std::uint32_t rows[hash_grid_detail::kMaxCorners];  // table row of each corner
+  std::uint32_t rows[kMaxCorners];  // table row of each corner
   // The tap weight on axis j and its derivatives of order 1–3 in x_j.
-  Scalar w[hash_grid_detail::kMaxDim][hash_grid_detail::kMaxTaps][4];
-  Scalar t[hash_grid_detail::kMaxDim];                // t_j (held in [0, 1] where smoothstep holds it)
-  Scalar scale[hash_grid_detail::kMaxDim];            // ∂t_j/∂x_j: 0 where t_j is held
+  Scalar w[kMaxDim][kMaxTaps][4];
+  Scalar t[kMaxDim];                // t_j (held in [0, 1] where smoothstep holds it)
+  Scalar scale[kMaxDim];            // ∂t_j/∂x_j: 0 where t_j is held
 };
 
 // A point's input streams, gathered into one contiguous run per point:
 //   x (d) | tangents a⁽ⁱ⁾ (T·d) | operator inputs a^[q] (Q·d) | M_q = Σᵢⱼ Cᵢⱼ a⁽ⁱ⁾a⁽ʲ⁾ᵀ,
 //   symmetrized (Q·d²) | Taylor inputs a_{p,k} (P·K·d)
 // so that Σᵢⱼ Cᵢⱼ a⁽ⁱ⁾ᵀ ∇²W a⁽ʲ⁾ = ⟨∇²W, M_q⟩ costs d² per corner, whatever T is.
-template <typename Scalar>
-struct HashGridEncoding<Scalar>::Offsets {
+struct Offsets {
   Offsets(const autodiff::StreamLayout& layout, int d, int bits)
       : d(d),
         bits(bits),
@@ -83,4 +80,5 @@ struct HashGridEncoding<Scalar>::Offsets {
   int a, b, m, taylor, stride;
 };
 
+}  // namespace hash_grid_detail
 }  // namespace nfield::fields

@@ -535,7 +535,8 @@ ConfigNode parse_config(std::string_view text, std::string file_name,
     throw ConfigError(file_name, documents[1].Mark(), "",
                       "expected one YAML document, found " + std::to_string(documents.size()));
   YAML::Node root = documents.empty() ? YAML::Node(YAML::NodeType::Map) : documents[0];
-  check_structure(root, file_name, "");
+  if (const auto problem = structure_problem(root, ""))
+    throw ConfigError(file_name, problem->mark, problem->path, problem->message);
   for (const std::string& assignment : overrides) apply_override(root, assignment);
   if (is_empty(root)) root.reset(YAML::Node(YAML::NodeType::Map));
   if (!root.IsMap())

@@ -69,7 +69,7 @@ class Override {
     } catch (const YAML::Exception& e) {
       throw fail("", "cannot parse the value as YAML: " + e.msg);
     }
-    check_structure(value, where_, "");
+    if (const auto problem = structure_problem(value, "")) throw fail(problem->path, problem->message);
     return value;
   }
 

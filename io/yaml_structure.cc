@@ -6,7 +6,6 @@
 #include <cmath>
 #include <map>
 
-#include "io/config.h"
 
 namespace nfield::io {
 
@@ -23,25 +22,23 @@ std::string join_key(const std::string& path, std::string_view key) {
   return path.empty() ? std::string(key) : path + "." + std::string(key);
 }
 
-void check_structure(const YAML::Node& node, const std::string& file, const std::string& path) {
+std::optional<StructureProblem> structure_problem(const YAML::Node& node, const std::string& path) {
   if (node.IsMap()) {
     std::map<std::string, int, std::less<>> first_line;
     for (const auto& entry : node) {
       const YAML::Node& key = entry.first;
-      if (!key.IsScalar())
-        throw ConfigError(file, key.Mark(), path,
-                          "expected a plain name as key, got " + describe(key));
+      if (!key.IsScalar()) return StructureProblem{key.Mark(), path, "expected a plain name as key, got " + describe(key)};
       auto [it, inserted] = first_line.emplace(key.Scalar(), key.Mark().line + 1);
       if (!inserted)
-        throw ConfigError(file, key.Mark(), path,
-                          "duplicate key '" + key.Scalar() + "' (first on line " +
-                              std::to_string(it->second) + ")");
-      check_structure(entry.second, file, join_key(path, key.Scalar()));
+        return StructureProblem{key.Mark(), path,
+                                "duplicate key '" + key.Scalar() + "' (first on line " + std::to_string(it->second) + ")"};
+      if (auto problem = structure_problem(entry.second, join_key(path, key.Scalar()))) return problem;
     }
   } else if (node.IsSequence()) {
     for (std::size_t i = 0; i < node.size(); ++i)
-      check_structure(node[i], file, path + "[" + std::to_string(i) + "]");
+      if (auto problem = structure_problem(node[i], path + "[" + std::to_string(i) + "]")) return problem;
   }
+  return std::nullopt;
 }
 
 YAML::Node without_marks(const YAML::Node& node) {

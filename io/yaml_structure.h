@@ -2,13 +2,14 @@
 // Checks and copies of yaml-cpp nodes that the config reader and `--set` share.
 //
 // yaml-cpp accepts a mapping with a repeated key or a non-scalar key and keeps one of the
-// values without a word; check_structure refuses both, so that a config means one thing.
+// values without a word; structure_problem finds both, so that a config means one thing.
 // Values given on the command line carry the marks of the `--set` text, which would be
 // reported as lines of the config file; without_marks copies a node without them.
 #pragma once
 
 #include <yaml-cpp/yaml.h>
 
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -23,8 +24,13 @@ std::string describe(const YAML::Node& node);
 // "a.b" from "a" and "b"; "b" from "" and "b".
 std::string join_key(const std::string& path, std::string_view key);
 
-// Throws a ConfigError at the first duplicate or non-scalar key under `node`.
-void check_structure(const YAML::Node& node, const std::string& file, const std::string& path);
+// The first duplicate or non-scalar key under `node` (whose key path is `path`): where it is,
+// the path of the mapping that holds it and what is wrong; none when every key is sound.
+struct StructureProblem {
+  YAML::Mark mark;
+  std::string path, message;
+};
+std::optional<StructureProblem> structure_problem(const YAML::Node& node, const std::string& path);
 
 YAML::Node without_marks(const YAML::Node& node);
 

@@ -56,8 +56,14 @@ PdeData::PdeData(const io::ConfigNode& node, const Domain& domain, const std::ve
   }
   // The file's reading, column checks and domain check are reference.file's.
   const PdeReference file(node, domain, measured, expressions, config_dir);
-  points_ = file.points();
-  values_ = file.values();
+  if (file.files().size() != 1) throw node.error("file", "expected one file of measurements");
+  const ReferencePoints& table = file.files().front();
+  points_ = table.points;
+  values_ = table.values;
+  // Column k of the table holds measured output table.outputs[k].
+  std::vector<int> columns;
+  for (const int k : table.outputs) columns.push_back(measured_[k]);
+  measured_ = columns;
 }
 
 void PdeData::read_exact(const io::ConfigNode& exact, const Domain& domain, const std::vector<std::string>& outputs,

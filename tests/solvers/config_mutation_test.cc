@@ -89,6 +89,16 @@ const std::set<std::string> kInteger = {
     "finest_resolution", "sections", "samples_per_section", "steps_per_diagonal",
     "resample_every", "frames", "memory", "crop", "frequencies", "direction_frequencies",
     "seed", "from_stage"};
+// `initial` counts the points of a batch (training.batch.initial); elsewhere it is a value
+// of any sign (constants.NAME.initial, an unknown constant's start).
+bool in_key_set(const std::set<std::string>& keys, const Path& path) {
+  const std::string key = last_key(path);
+  if (key == "initial") {
+    const Path parent(path.begin(), path.end() - 1);
+    return last_key(parent) == "batch";
+  }
+  return keys.count(key) > 0;
+}
 // Free text, where any string is a valid value.
 const std::set<std::string> kFreeText = {"dir"};
 
@@ -189,9 +199,9 @@ void mutate_values(const YAML::Node& root, const YAML::Node& node, const Path& p
     if (!number && !kFreeText.count(key)) value_mutant("sin(x", scalar("sin(x"), true);
     if (number) {
       value_mutant(".nan", scalar(".nan"), true);
-      value_mutant("-3", scalar("-3"), kPositive.count(key) > 0);
+      value_mutant("-3", scalar("-3"), in_key_set(kPositive, path));
       value_mutant("0", scalar("0"), false);
-      value_mutant("1.5", scalar("1.5"), kInteger.count(key) > 0);
+      value_mutant("1.5", scalar("1.5"), in_key_set(kInteger, path));
       value_mutant("1e300", scalar("1e300"), false);
       value_mutant("-1e300", scalar("-1e300"), false);
     }
