@@ -382,7 +382,9 @@ class Pde final : public Problem {
       if (!contains(constants_used_, name)) constants_used_.push_back(name);
   }
 
-  void read_reference(const io::ConfigNode& node, const std::filesystem::path& config_dir) {
+  // How the reference and the measurements compile their expressions: over the coordinates
+  // and constants (no outputs), noting the constants they read.
+  PdeExpressions value_expressions() {
     PdeExpressions e;
     e.compile = [this](const io::ConfigNode& parent, const std::string& key) {
       try {
@@ -397,25 +399,16 @@ class Pde final : public Problem {
       return constant_expression(parent, key,
                                  "constants: " + (constants_.empty() ? std::string("none") : constant_names()));
     };
-    reference_ = PdeReference(node, domain_, compared_names(), e, config_dir, outputs_.size());
+    return e;
+  }
+
+  void read_reference(const io::ConfigNode& node, const std::filesystem::path& config_dir) {
+    reference_ = PdeReference(node, domain_, compared_names(), value_expressions(), config_dir, outputs_.size());
   }
 
   // `data`: measurements (solvers/problems/pde_data.h).
   void read_data(const io::ConfigNode& node, const std::filesystem::path& config_dir) {
-    PdeExpressions e;
-    e.compile = [this](const io::ConfigNode& parent, const std::string& key) {
-      try {
-        io::CompiledExpression compiled(parent.get<std::string>(key), scope(false));
-        note_constants(compiled);
-        return compiled;
-      } catch (const io::ExpressionError& error) {
-        throw parent.expression_error(key, error);
-      }
-    };
-    e.constant = [this](const io::ConfigNode& parent, const std::string& key) {
-      return constant_expression(parent, key, "constants: " + constant_names());
-    };
-    data_ = PdeData(node, domain_, outputs_, e, &reference_, config_dir);
+    data_ = PdeData(node, domain_, outputs_, value_expressions(), &reference_, config_dir);
   }
 
   std::string constant_names() const {
