@@ -128,6 +128,139 @@ void write_checkpoint(const std::filesystem::path& path, const fields::Field<Sca
   file.commit();
 }
 
+// Puts the state of checkpoint `resume` back: the network's parameters (the unknown
+// constants, θ's tail, come back with the trainer's state), the trainer's and the problem's.
+template <typename Scalar>
+void resume_from(const std::filesystem::path& resume, RunSetup& setup, fields::Field<Scalar>& field,
+                 Trainer<Scalar>& trainer, bool root) {
+  const io::H5Reader file(resume);
+  const fields::Field<Scalar> saved = fields::load_field<Scalar>(file);
+  if (saved.parameter_count() != field.network_parameter_count())
+    throw std::runtime_error(resume.string() + ": its field has " +
+                             std::to_string(saved.parameter_count()) +
+                             " parameters, the config's has " +
+                             std::to_string(field.network_parameter_count()));
+  // The network's part; unknown constants (θ's tail) come back with the trainer's state.
+  field.parameters().head(saved.parameter_count()) = saved.parameters();
+  trainer.load_state(file);
+  setup.problem->load_state(file);
+  if (root) {
+    std::printf("resuming from %s at step %ld\n", resume.string().c_str(), trainer.step());
+    // A finished run resumed with the same stages has nothing left to train: say so rather
+    // than write the same outputs again as if the run had trained.
+    if (trainer.remaining_stages() == 0)
+      std::printf("note: that run finished all %zu stages of training.stages; nothing is trained, the outputs "
+                  "are written again (to train further, add a stage)\n",
+                  setup.training.stages.size());
+  }
+}
+
+// metrics.json of a finished, interrupted or diverged run (docs/config.md, "metrics.json").
+template <typename Scalar>
+nlohmann::ordered_json run_metrics(const RunSetup& setup, Trainer<Scalar>& trainer, const fields::Field<Scalar>& field,
+                                   bool finished, double wall, const GridMetrics& grid,
+                                   const std::vector<std::pair<std::string, double>>& extra, long first_step,
+                                   Communicator& communicator) {
+  nlohmann::ordered_json metrics;
+  metrics["problem"] = setup.root.get<std::string>("problem");
+  metrics["finished"] = finished;
+  if (const auto& d = trainer.divergence()) {
+    metrics["stopped"] = "diverged: " + d->describe();
+    metrics["divergence"] = {{"step", d->step},
+                             {"stage", d->stage},
+                             {"optimizer", d->optimizer},
+                             {"what", d->what},
+                             {"last_finite_step", d->last_finite_step},
+                             {"last_finite_loss", d->last_finite_loss}};
+  } else if (!finished) {
+    metrics["stopped"] = "interrupted";
+  }
+  metrics["steps"] = trainer.step();
+  metrics["wall_s"] = wall;
+  metrics["step_ms_median"] = median(trainer.step_milliseconds());
+  metrics["precision"] = setup.training.precision;
+  metrics["parameters"] = field.parameter_count();
+  double loss = 0;
+  for (size_t k = 0; k < trainer.term_names().size(); ++k) {
+    metrics["losses"][trainer.term_names()[k]] = trainer.term_losses()[k];
+    loss += trainer.term_losses()[k];
+  }
+  metrics["loss"] = loss;
+  metrics["stage_losses"] = trainer.stage_losses();
+  // Per finished stage: optimizer, steps configured and taken and why it ended, final loss,
+  // rel_l2 (the problem's reported error, else the grid's), wall seconds.
+  metrics["stages"] = nlohmann::ordered_json::array();
+  for (size_t k = 0; k < trainer.stage_losses().size(); ++k) {
+    nlohmann::ordered_json stage;
+    stage["optimizer"] = setup.training.stages[k].optimizer;
+    stage["steps"] = setup.training.stages[k].steps;
+    if (k < trainer.stage_ends().size()) {
+      const StageEnd& end = trainer.stage_ends()[k];
+      stage["iterations"] = end.iterations;
+      stage["ended"] = end.ended;
+      if (!end.termination.empty()) stage["termination"] = end.termination;
+      if (!end.message.empty()) stage["message"] = end.message;
+    }
+    stage["loss"] = trainer.stage_losses()[k];
+    if (k < trainer.stage_errors().size() && std::isfinite(trainer.stage_errors()[k]))
+      stage["rel_l2"] = trainer.stage_errors()[k];
+    if (k < trainer.stage_seconds().size() && std::isfinite(trainer.stage_seconds()[k]))
+      stage["wall_s"] = trainer.stage_seconds()[k];
+    metrics["stages"].push_back(stage);
+  }
+  if (grid.has_error) {
+    metrics["rel_l2"] = grid.rel_l2;
+    metrics["max_abs_err"] = grid.max_abs_err;
+    const std::vector<std::string> names = setup.problem->output_names();
+    for (size_t c = 0; names.size() > 1 && c < names.size() && c < grid.output_rel_l2.size(); ++c) {
+      metrics["rel_l2_" + names[c]] = grid.output_rel_l2[c];
+      metrics["max_abs_err_" + names[c]] = grid.output_max_abs_err[c];
+    }
+    if (!grid.frame_rel_l2.empty()) {
+      metrics["max_frame_rel_l2"] = *std::max_element(grid.frame_rel_l2.begin(), grid.frame_rel_l2.end());
+      metrics["frame_rel_l2"] = grid.frame_rel_l2;
+      metrics["frame_times"] = grid.frame_times;
+    }
+  }
+  if (setup.problem->writes_grid_outputs()) metrics["residual_rms"] = grid.residual_rms;
+  if (setup.problem->domain().geometry()) {
+    // The measure of a shaped domain: exact for one primitive, else a Monte Carlo estimate.
+    const geometry::Measure m = setup.problem->domain().space_measure();
+    metrics["domain_measure"] = m.value;
+    metrics["domain_measure_std_error"] = m.std_error;
+    metrics["domain_measure_exact"] = m.exact;
+  }
+  if (communicator.size() > 1) {
+    metrics["mpi_ranks"] = communicator.size();
+    // Sent by this rank into the step's sums (and stop flags, clock): the volume per step.
+    const long steps = trainer.step() - first_step;
+    if (steps > 0)
+      metrics["mpi_bytes_per_step"] =
+          static_cast<double>(communicator.bytes_communicated()) / static_cast<double>(steps);
+  }
+  for (const auto& [key, value] : trainer.extra_metrics()) metrics[key] = value;
+  for (const auto& [key, value] : extra) metrics[key] = value;
+  return metrics;
+}
+
+// The unknown constants' final values and trajectories into `metrics`, their plot beside it.
+template <typename Scalar>
+void report_unknowns(Trainer<Scalar>& trainer, const std::filesystem::path& dir, nlohmann::ordered_json& metrics) {
+  const UnknownConstants* unknowns = trainer.unknowns().constants();
+  if (!unknowns) return;
+  UnknownTrajectory trajectory;
+  const auto& samples = trainer.unknowns().trajectory();
+  trajectory.values.resize(static_cast<Eigen::Index>(samples.size()), unknowns->count());
+  for (std::size_t s = 0; s < samples.size(); ++s) {
+    trajectory.steps.push_back(samples[s].step);
+    for (int i = 0; i < unknowns->count(); ++i)
+      trajectory.values(static_cast<Eigen::Index>(s), i) = samples[s].values[static_cast<std::size_t>(i)];
+  }
+  metrics["unknowns"] = unknowns_metrics(*unknowns, trajectory);
+  write_unknowns_plot(dir / "unknowns.png", *unknowns, trajectory);
+  std::printf("%s\n", unknowns_line(*unknowns).c_str());
+}
+
 template <typename Scalar>
 int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
   const std::filesystem::path dir = setup.output.dir;
@@ -140,28 +273,7 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
   Communicator& communicator = world_communicator();
   const bool root = communicator.rank() == 0;
   Trainer<Scalar> trainer(*setup.problem, field, setup.training, &communicator);
-  if (!resume.empty()) {
-    const io::H5Reader file(resume);
-    const fields::Field<Scalar> saved = fields::load_field<Scalar>(file);
-    if (saved.parameter_count() != field.network_parameter_count())
-      throw std::runtime_error(resume.string() + ": its field has " +
-                               std::to_string(saved.parameter_count()) +
-                               " parameters, the config's has " +
-                               std::to_string(field.network_parameter_count()));
-    // The network's part; unknown constants (θ's tail) come back with the trainer's state.
-    field.parameters().head(saved.parameter_count()) = saved.parameters();
-    trainer.load_state(file);
-    setup.problem->load_state(file);
-    if (root) {
-      std::printf("resuming from %s at step %ld\n", resume.string().c_str(), trainer.step());
-      // A finished run resumed with the same stages has nothing left to train: say so rather
-      // than write the same outputs again as if the run had trained.
-      if (trainer.remaining_stages() == 0)
-        std::printf("note: that run finished all %zu stages of training.stages; nothing is trained, the outputs "
-                    "are written again (to train further, add a stage)\n",
-                    setup.training.stages.size());
-    }
-  }
+  if (!resume.empty()) resume_from(resume, setup, field, trainer, root);
   const long first_step = trainer.step();
   if (root) {
     std::filesystem::create_directories(dir);
@@ -246,98 +358,9 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
   std::vector<std::pair<std::string, double>> extra;
   setup.problem->write_outputs(context, extra);
 
-  nlohmann::ordered_json metrics;
-  metrics["problem"] = setup.root.get<std::string>("problem");
-  metrics["finished"] = finished;
-  if (const auto& d = trainer.divergence()) {
-    metrics["stopped"] = "diverged: " + d->describe();
-    metrics["divergence"] = {{"step", d->step},
-                             {"stage", d->stage},
-                             {"optimizer", d->optimizer},
-                             {"what", d->what},
-                             {"last_finite_step", d->last_finite_step},
-                             {"last_finite_loss", d->last_finite_loss}};
-  } else if (!finished) {
-    metrics["stopped"] = "interrupted";
-  }
-  metrics["steps"] = trainer.step();
-  metrics["wall_s"] = wall;
-  metrics["step_ms_median"] = median(trainer.step_milliseconds());
-  metrics["precision"] = setup.training.precision;
-  metrics["parameters"] = field.parameter_count();
-  double loss = 0;
-  for (size_t k = 0; k < trainer.term_names().size(); ++k) {
-    metrics["losses"][trainer.term_names()[k]] = trainer.term_losses()[k];
-    loss += trainer.term_losses()[k];
-  }
-  metrics["loss"] = loss;
-  metrics["stage_losses"] = trainer.stage_losses();
-  // Per finished stage: optimizer, steps configured and taken and why it ended, final loss,
-  // rel_l2 (the problem's reported error, else the grid's), wall seconds.
-  metrics["stages"] = nlohmann::ordered_json::array();
-  for (size_t k = 0; k < trainer.stage_losses().size(); ++k) {
-    nlohmann::ordered_json stage;
-    stage["optimizer"] = setup.training.stages[k].optimizer;
-    stage["steps"] = setup.training.stages[k].steps;
-    if (k < trainer.stage_ends().size()) {
-      const StageEnd& end = trainer.stage_ends()[k];
-      stage["iterations"] = end.iterations;
-      stage["ended"] = end.ended;
-      if (!end.termination.empty()) stage["termination"] = end.termination;
-      if (!end.message.empty()) stage["message"] = end.message;
-    }
-    stage["loss"] = trainer.stage_losses()[k];
-    if (k < trainer.stage_errors().size() && std::isfinite(trainer.stage_errors()[k]))
-      stage["rel_l2"] = trainer.stage_errors()[k];
-    if (k < trainer.stage_seconds().size() && std::isfinite(trainer.stage_seconds()[k]))
-      stage["wall_s"] = trainer.stage_seconds()[k];
-    metrics["stages"].push_back(stage);
-  }
-  if (grid.has_error) {
-    metrics["rel_l2"] = grid.rel_l2;
-    metrics["max_abs_err"] = grid.max_abs_err;
-    const std::vector<std::string> names = setup.problem->output_names();
-    for (size_t c = 0; names.size() > 1 && c < names.size() && c < grid.output_rel_l2.size(); ++c) {
-      metrics["rel_l2_" + names[c]] = grid.output_rel_l2[c];
-      metrics["max_abs_err_" + names[c]] = grid.output_max_abs_err[c];
-    }
-    if (!grid.frame_rel_l2.empty()) {
-      metrics["max_frame_rel_l2"] = *std::max_element(grid.frame_rel_l2.begin(), grid.frame_rel_l2.end());
-      metrics["frame_rel_l2"] = grid.frame_rel_l2;
-      metrics["frame_times"] = grid.frame_times;
-    }
-  }
-  if (setup.problem->writes_grid_outputs()) metrics["residual_rms"] = grid.residual_rms;
-  if (setup.problem->domain().geometry()) {
-    // The measure of a shaped domain: exact for one primitive, else a Monte Carlo estimate.
-    const geometry::Measure m = setup.problem->domain().space_measure();
-    metrics["domain_measure"] = m.value;
-    metrics["domain_measure_std_error"] = m.std_error;
-    metrics["domain_measure_exact"] = m.exact;
-  }
-  if (communicator.size() > 1) {
-    metrics["mpi_ranks"] = communicator.size();
-    // Sent by this rank into the step's sums (and stop flags, clock): the volume per step.
-    const long steps = trainer.step() - first_step;
-    if (steps > 0)
-      metrics["mpi_bytes_per_step"] =
-          static_cast<double>(communicator.bytes_communicated()) / static_cast<double>(steps);
-  }
-  for (const auto& [key, value] : trainer.extra_metrics()) metrics[key] = value;
-  for (const auto& [key, value] : extra) metrics[key] = value;
-  if (const UnknownConstants* unknowns = trainer.unknowns().constants()) {
-    UnknownTrajectory trajectory;
-    const auto& samples = trainer.unknowns().trajectory();
-    trajectory.values.resize(static_cast<Eigen::Index>(samples.size()), unknowns->count());
-    for (std::size_t s = 0; s < samples.size(); ++s) {
-      trajectory.steps.push_back(samples[s].step);
-      for (int i = 0; i < unknowns->count(); ++i)
-        trajectory.values(static_cast<Eigen::Index>(s), i) = samples[s].values[static_cast<std::size_t>(i)];
-    }
-    metrics["unknowns"] = unknowns_metrics(*unknowns, trajectory);
-    write_unknowns_plot(dir / "unknowns.png", *unknowns, trajectory);
-    std::printf("%s\n", unknowns_line(*unknowns).c_str());
-  }
+  nlohmann::ordered_json metrics =
+      run_metrics(setup, trainer, field, finished, wall, grid, extra, first_step, communicator);
+  report_unknowns(trainer, dir, metrics);
   metrics["nfield_version"] = std::string(version());
   io::write_atomically(dir / "metrics.json", [&](const std::filesystem::path& p) {
     std::ofstream(p) << metrics.dump(2) << "\n";
