@@ -41,7 +41,7 @@ class EncodingType {
   // Whether the encoding reads a variance beside each coordinate it encodes (its input is
   // [μ₁ … μ_k, σ₁² … σ_k²], fields/integrated_positional.h): the field then takes one more
   // input per encoded coordinate (FieldType::variance_inputs), which the problem must give
-  // (solvers::Problem::gives_input_variances).
+  // (solvers::TakesInputVariances).
   virtual bool reads_variances() const { return false; }
 
   // Whether `from_stage` > 0 is allowed: features that enter at a later training stage

@@ -33,7 +33,7 @@
 #include "io/config.h"
 #include "io/hdf5_file.h"
 #include "io/version.h"
-#include "solvers/conditions/hard_constraints.h"
+#include "solvers/conditions/field_solution.h"
 #include "solvers/run.h"
 
 namespace py = pybind11;
@@ -128,17 +128,8 @@ class CheckpointField {
     Streams<double> out;
     {
       py::gil_scoped_release unlocked;
-      if (ansatz_) {
-        const solvers::NetworkStreams network = [this](const StreamLayout& l,
-                                                       const Eigen::MatrixXd& y) {
-          Streams<double> n;
-          field_->evaluate(l, y, n);
-          return n;
-        };
-        out = solvers::with_ansatz(network, ansatz_)(layout, as_eigen(points));
-      } else {
-        field_->evaluate(layout, as_eigen(points), out);
-      }
+      if (ansatz_) out = solvers::make_solution(*field_, ansatz_).streams(layout, as_eigen(points));
+      else field_->evaluate(layout, as_eigen(points), out);  // in place, no copy
     }
     return stream_arrays(std::move(out), layout);
   }

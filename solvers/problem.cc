@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: MIT
 #include "solvers/problem.h"
+#include "solvers/problem_capabilities.h"
 
 #include <stdexcept>
 
@@ -9,16 +10,9 @@ Eigen::MatrixXd Problem::exact(const Eigen::MatrixXd&) const {
   throw std::logic_error("this problem has no exact solution");
 }
 
-Eigen::Array<bool, Eigen::Dynamic, 1> Problem::error_mask(const Eigen::MatrixXd& x) const {
+Eigen::Array<bool, Eigen::Dynamic, 1> error_mask(const Problem& problem, const Eigen::MatrixXd& x) {
+  if (const auto* masks = capability<MasksError>(problem)) return masks->error_mask(x);
   return Eigen::Array<bool, Eigen::Dynamic, 1>::Constant(x.rows(), true);
-}
-
-void Problem::render_views(const OutputContext&, const RenderRequest&) const {
-  throw std::invalid_argument("this problem's field renders no images (nfield render takes a radiance-field checkpoint, problem: nerf)");
-}
-
-void Problem::give_input_variances() {
-  throw std::logic_error("this problem gives no variances of its points (Problem::gives_input_variances)");
 }
 
 void Problem::write_outputs(const OutputContext&, std::vector<std::pair<std::string, double>>&) const {}

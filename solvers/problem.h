@@ -3,7 +3,10 @@
 // A problem is one equation family (Poisson, Helmholtz, wave, Eikonal, …) read from the
 // `equation:` and `conditions:` sections of a config. It names the loss terms a trainer
 // lowers, and optionally an exact or reference solution for error metrics. Each family is
-// one file in solvers/ plus one line in register_problems() (problems.cc).
+// one file in solvers/ plus one line in register_problems() (problems.cc). What only some
+// problems do (render views, keep state in checkpoints, sample where the field is, mask
+// their error, give input variances, report progress figures) are small interfaces of their
+// own beside this one: solvers/problem_capabilities.h.
 #pragma once
 
 #include <filesystem>
@@ -17,19 +20,14 @@
 #include "fields/field_config.h"
 #include "io/config.h"
 #include "solvers/residual.h"
+#include "solvers/solution.h"
 #include "solvers/unknowns.h"
-
-namespace nfield::io {
-class H5Writer;
-class H5Reader;
-}  // namespace nfield::io
 
 namespace nfield::solvers {
 
 // What a problem writes besides the common outputs (grid, metrics).
 struct OutputContext {
-  using FieldStreams =
-      std::function<autodiff::Streams<double>(const autodiff::StreamLayout&, const Eigen::MatrixXd&)>;
+  using FieldStreams = Solution::Streams;
   std::filesystem::path dir;
   // Values of the trained field at points (n × output_dim), in double.
   std::function<Eigen::MatrixXd(const Eigen::MatrixXd&)> values;
@@ -65,13 +63,6 @@ class Problem {
   // The field's inputs: the domain's coordinates, or more (a radiance field also takes the
   // ray direction).
   virtual int field_input_dim() const { return domain().input_dim(); }
-  // Variances beside the inputs, for encodings that read them (integrated_positional,
-  // fields/integrated_positional.h): whether the problem can give each point's variance per
-  // encoded coordinate (a radiance field: each sample's frustum Gaussian), and the switch the
-  // program turns on when the field's encoding reads them, after which field_input_dim()
-  // counts the variance columns and every point the problem hands the field carries them.
-  virtual bool gives_input_variances() const { return false; }
-  virtual void give_input_variances();
   virtual int output_dim() const { return 1; }
   virtual std::vector<std::string> output_names() const { return {"u"}; }
   // first_omega and hidden_omega of a field whose config names none: SIREN's 30 and 30 for
@@ -94,8 +85,6 @@ class Problem {
   virtual bool has_exact() const { return false; }
   // Exact or reference solution at x (n × output_dim).
   virtual Eigen::MatrixXd exact(const Eigen::MatrixXd& x) const;
-  // Which evaluation points count in error metrics (e.g. outside an absorbing layer).
-  virtual Eigen::Array<bool, Eigen::Dynamic, 1> error_mask(const Eigen::MatrixXd& x) const;
 
   // The rel. L2 error of the quantity the problem reports, on the output grid, from the
   // trained field's values; nullopt: that error is the grid's comparison of the network
@@ -103,34 +92,6 @@ class Problem {
   // reported quantity (the factored Eikonal gives τ, the error is the travel time's). Called
   // after every training stage; write_outputs reports the same number after the last.
   virtual std::optional<double> reported_error(const OutputContext&) const { return std::nullopt; }
-
-  // The field being trained, for problems that sample where it is (a radiance field's
-  // occupancy grid, AutoInt's sampling network): values (n × output_dim) at n ×
-  // field_input_dim() points, and its streams there. The program calls this once before
-  // training; both stay valid until training ends.
-  using FieldValues = std::function<Eigen::MatrixXd(const Eigen::MatrixXd&)>;
-  virtual void watch_field(FieldValues values, OutputContext::FieldStreams streams) {
-    (void)values;
-    (void)streams;
-  }
-  // What a problem learns beside the field (AutoInt's sampling network), kept in checkpoints:
-  // saved with every checkpoint, loaded on resume and by `nfield render`. Default: nothing.
-  virtual void save_state(io::H5Writer& file) const { (void)file; }
-  virtual void load_state(const io::H5Reader& file) { (void)file; }
-
-  // Figures for the progress line (a radiance field's PSNR on a held-out view, rays per
-  // second), computed at most every few seconds by the program; `progress` is the step just
-  // reported. Empty: none.
-  virtual std::vector<std::pair<std::string, double>> progress_metrics(
-      const OutputContext& context, double steps_per_second) const {
-    (void)context;
-    (void)steps_per_second;
-    return {};
-  }
-
-  // Renders views of the trained field into context.dir (`nfield render`). Problems whose
-  // fields are not radiance fields throw std::invalid_argument.
-  virtual void render_views(const OutputContext& context, const RenderRequest& request) const;
 
   // Whether the field is written on the output grid over the domain (solution.vti and its
   // PNG, grid errors): false for fields whose inputs are not the domain's coordinates.

@@ -22,7 +22,9 @@
 #include "io/version.h"
 #include "solvers/geometry/geometry.h"
 #include "solvers/output/grid_output.h"
+#include "solvers/conditions/field_solution.h"
 #include "solvers/conditions/hard_constraints.h"
+#include "solvers/problem_capabilities.h"
 #include "solvers/training/progress_printer.h"
 #include "solvers/training/trainer.h"
 
@@ -94,23 +96,17 @@ void set_scales(const fields::Field<Scalar>& field, std::shared_ptr<const Ansatz
   context.scales = field.scales();
   context.output_scale = field.output_scale();
   context.scale_cutoffs = fields::field_type(field.options().type).scale_cutoffs(field.options());
-  context.scale_values = [&field, ansatz](const Eigen::MatrixXd& x, int scale) {
-    Eigen::MatrixXd n = field.values(x.cast<Scalar>(), scale).template cast<double>();
-    return ansatz ? ansatz->values(x, n) : n;
-  };
+  context.scale_values = scale_values(field, std::move(ansatz));
 }
 
+// What the outputs read of a trained field: its solution, in the field's precision.
 template <typename Scalar>
-StreamEvaluator evaluator(const fields::Field<Scalar>& field) {
-  return [&field](const autodiff::StreamLayout& layout, const Eigen::MatrixXd& x) {
-    autodiff::Streams<Scalar> out;
-    field.evaluate(layout, x.cast<Scalar>(), out);
-    autodiff::Streams<double> result;
-    result.points = out.points;
-    result.count = out.count;
-    result.data = out.data.template cast<double>();
-    return result;
-  };
+OutputContext output_context(const std::filesystem::path& dir, const Solution& solution, const RunSetup& setup,
+                             const fields::Field<Scalar>& field) {
+  OutputContext context{dir, solution.values, setup.output.grid, solution.streams,
+                        std::numeric_limits<Scalar>::epsilon()};
+  set_scales(field, setup.problem->ansatz(), context);
+  return context;
 }
 
 template <typename Scalar>
@@ -120,7 +116,7 @@ void write_checkpoint(const std::filesystem::path& path, const fields::Field<Sca
   io::H5Writer file(path);
   fields::save_field(file, field);
   trainer.save_state(file);
-  problem.save_state(file);
+  if (const auto* state = capability<KeepsState>(problem)) state->save_state(file);
   file.write_attribute("/", "config", config_text);
   // Relative data paths in the config (point clouds, images) resolve against this folder.
   file.write_attribute("/", "config_dir", config_dir.string());
@@ -143,7 +139,7 @@ void resume_from(const std::filesystem::path& resume, RunSetup& setup, fields::F
   // The network's part; unknown constants (θ's tail) come back with the trainer's state.
   field.parameters().head(saved.parameter_count()) = saved.parameters();
   trainer.load_state(file);
-  setup.problem->load_state(file);
+  if (auto* state = capability<KeepsState>(*setup.problem)) state->load_state(file);
   if (root) {
     std::printf("resuming from %s at step %ld\n", resume.string().c_str(), trainer.step());
     // A finished run resumed with the same stages has nothing left to train: say so rather
@@ -287,15 +283,8 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
 
   // The field as everything after training sees it, wrapped once: with hard conditions
   // u = A + D·N, not the network N.
-  const auto ansatz = setup.problem->ansatz();
-  const StreamEvaluator solution = with_ansatz(evaluator(field), ansatz);
-  OutputContext context{dir, [&field, ansatz](const Eigen::MatrixXd& x) {
-                          Eigen::MatrixXd n = field.values(x.cast<Scalar>()).template cast<double>();
-                          return ansatz ? ansatz->values(x, n) : n;
-                        },
-                        setup.output.grid, solution, std::numeric_limits<Scalar>::epsilon()};
-  set_scales(field, ansatz, context);
-  setup.problem->watch_field(context.values, context.streams);
+  const Solution solution = make_solution(field, setup.problem->ansatz());
+  const OutputContext context = output_context(dir, solution, setup, field);
   const auto started = std::chrono::steady_clock::now();
   bool finished;
   {
@@ -306,6 +295,8 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
     ProgressPrinter printer(printing);
     typename Trainer<Scalar>::Callbacks callbacks;
     callbacks.stop_requested = [] { return g_signal.load() != 0; };
+    if (auto* sampling = capability<SamplesWithSolution>(*setup.problem))
+      callbacks.before_draw = [sampling, &solution](long step, Random& rng) { sampling->before_step(step, solution, rng); };
     if (!root) {
       // The other ranks only train; an error is rank 0's to compute and write.
       callbacks.stage_error = [] { return std::numeric_limits<double>::quiet_NaN(); };
@@ -320,7 +311,8 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
     callbacks.progress = [&](const Progress& p) {
       const auto now = std::chrono::steady_clock::now();
       if (now - figured >= std::chrono::seconds(10)) {
-        problem_figures = setup.problem->progress_metrics(context, p.steps_per_second);
+        if (const auto* reports = capability<ReportsProgress>(*setup.problem))
+          problem_figures = reports->progress_metrics(context, {p.steps_per_second, p.term_points, p.term_groups});
         figured = std::chrono::steady_clock::now();
       }
       if (problem_figures.empty()) return printer.step(p);
@@ -333,7 +325,7 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
     callbacks.stage_error = [&] {
       if (const std::optional<double> error = setup.problem->reported_error(context)) return *error;
       return setup.problem->has_exact() && setup.problem->writes_grid_outputs()
-                 ? grid_error(*setup.problem, solution, setup.output).rel_l2
+                 ? grid_error(*setup.problem, solution.streams, setup.output).rel_l2
                  : std::numeric_limits<double>::quiet_NaN();
     };
     callbacks.checkpoint = [&] {
@@ -353,7 +345,7 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
 
   const GridMetrics grid =
       setup.problem->writes_grid_outputs()
-          ? write_grid_outputs(*setup.problem, solution, setup.output, &context)
+          ? write_grid_outputs(*setup.problem, solution.streams, setup.output, &context)
           : GridMetrics{};
   std::vector<std::pair<std::string, double>> extra;
   setup.problem->write_outputs(context, extra);
@@ -448,13 +440,14 @@ RunSetup setup_run(io::ConfigNode root, const std::filesystem::path& config,
   // problem that gives them; it then appends them to every point it hands the field.
   if (fields::reads_variances(s.field.encoding)) {
     const io::ConfigNode encoding = s.root.child("field").child("encoding");
-    if (!s.problem->gives_input_variances())
+    auto* variances = capability<TakesInputVariances>(*s.problem);
+    if (!variances)
       throw encoding.error("type", "'" + s.field.encoding.type +
                                        "' reads a variance beside each coordinate, and problem '" +
                                        s.root.get<std::string>("problem") +
                                        "' gives none (problem: nerf does: each sample's frustum)");
     const int coordinates = s.problem->field_input_dim();
-    s.problem->give_input_variances();
+    variances->give_input_variances();
     const int given = s.problem->field_input_dim() - coordinates;
     if (s.field.input_dim - coordinates != given)
       throw encoding.error("type", "'" + s.field.encoding.type + "' on a '" + s.field.type + "' field reads " +
@@ -550,21 +543,18 @@ void render_checkpoint(const std::filesystem::path& checkpoint, const RenderRequ
                        const std::filesystem::path& out_dir) {
   const io::H5Reader file(checkpoint);
   RunSetup setup = checkpoint_run(file, out_dir);
-  setup.problem->load_state(file);
+  const auto* renders = capability<RendersViews>(*setup.problem);
+  if (!renders)
+    throw std::invalid_argument(checkpoint.string() + ": problem '" + setup.root.get<std::string>("problem") +
+                                "' renders no images (nfield render takes a radiance-field checkpoint, problem: nerf)");
+  if (auto* state = capability<KeepsState>(*setup.problem)) state->load_state(file);
   // In the precision it was trained in (a float field renders about twice as fast).
-  if (setup.training.precision == "float") {
-    const fields::Field<float> field = fields::load_field<float>(file);
-    setup.problem->render_views(
-        {out_dir, [&field](const Eigen::MatrixXd& x) { return field.values(x.cast<float>()).cast<double>().eval(); },
-         setup.output.grid, evaluator(field), std::numeric_limits<float>::epsilon()},
-        request);
-  } else {
-    const fields::Field<double> field = fields::load_field<double>(file);
-    setup.problem->render_views(
-        {out_dir, [&field](const Eigen::MatrixXd& x) { return field.values(x); }, setup.output.grid, evaluator(field),
-         std::numeric_limits<double>::epsilon()},
-        request);
-  }
+  const auto render = [&](const auto& field) {
+    const Solution solution = make_solution(field, setup.problem->ansatz());
+    renders->render_views(output_context(out_dir, solution, setup, field), request);
+  };
+  if (setup.training.precision == "float") render(fields::load_field<float>(file));
+  else render(fields::load_field<double>(file));
 }
 
 void evaluate_checkpoint(const std::filesystem::path& checkpoint, int grid_points,
@@ -577,10 +567,9 @@ void evaluate_checkpoint(const std::filesystem::path& checkpoint, int grid_point
     throw std::runtime_error(checkpoint.string() + ": problem '" +
                              setup.root.get<std::string>("problem") +
                              "' has no grid outputs to evaluate");
-  OutputContext scales{out_dir, {}, setup.output.grid, {}};
-  set_scales(field, setup.problem->ansatz(), scales);
-  const GridMetrics grid = write_grid_outputs(
-      *setup.problem, with_ansatz(evaluator(field), setup.problem->ansatz()), setup.output, &scales);
+  const Solution solution = make_solution(field, setup.problem->ansatz());
+  const OutputContext context = output_context(out_dir, solution, setup, field);
+  const GridMetrics grid = write_grid_outputs(*setup.problem, solution.streams, setup.output, &context);
   std::printf("wrote %s", out_dir.string().c_str());
   if (grid.has_error) std::printf(" (rel_l2 %.3e, max_abs_err %.3e)", grid.rel_l2, grid.max_abs_err);
   std::printf("\n");

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: MIT
 #include "solvers/output/grid_output.h"
+#include "solvers/problem_capabilities.h"
 
 #include <algorithm>
 #include <cmath>
@@ -118,7 +119,7 @@ GridMetrics grid_error(const Problem& problem, const StreamEvaluator& evaluate,
     const Eigen::MatrixXd x = frame_points(domain, space, k, frames, &t);
     const Eigen::MatrixXd exact = problem.exact(x);
     ErrorSums frame;
-    frame.add(values_at(evaluate, domain, x) - exact, exact, problem.error_mask(x) && domain.contains_rows(x));
+    frame.add(values_at(evaluate, domain, x) - exact, exact, error_mask(problem, x) && domain.contains_rows(x));
     sums.merge(frame);
     if (domain.has_time()) {
       metrics.frame_rel_l2.push_back(frame.rel_l2());
@@ -199,7 +200,7 @@ GridMetrics write_grid_outputs(const Problem& problem, const StreamEvaluator& ev
       const Eigen::MatrixXd exact = problem.exact(x);
       const Eigen::MatrixXd error = u - exact;  // NaN outside a shaped domain, not summed
       ErrorSums frame;
-      frame.add(error, exact, problem.error_mask(x) && inside);
+      frame.add(error, exact, error_mask(problem, x) && inside);
       sums.merge(frame);
       if (domain.has_time()) {
         metrics.frame_rel_l2.push_back(frame.rel_l2());

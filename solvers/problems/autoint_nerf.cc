@@ -47,8 +47,9 @@
 //
 // Sampling network (`render.sampler`). The sections are those a small network places per
 // ray (section_sampler.h) instead of equal ones, in training and rendering alike. Before
-// each batch's step of the field, the network takes one Adam step on the rendering loss of
-// (some of) that batch's rays at its own sections, with Φ fixed; the field's step then trains at the
+// each batch's step of the field (before_step), the network takes one Adam step on the
+// rendering loss of `sampler.rays` rays of their own, drawn like the batch's, at its own
+// sections, with Φ fixed; the field's step then trains at the
 // stratified samples of the sections it now places. Its weights and Adam state are saved in
 // the checkpoint (group `sampler`), so resume and `nfield render` use the same sections. A
 // ray then costs one evaluation of the sampling network besides the K + 1 of Φ.
@@ -71,6 +72,7 @@
 #include "autodiff/sequential.h"
 #include "integrators/ray_sampling.h"
 #include "integrators/volume_rendering.h"
+#include "solvers/problem_capabilities.h"
 #include "solvers/problems/problems.h"
 #include "solvers/problems/radiance_scene.h"
 #include "solvers/problems/section_sampler.h"
@@ -164,7 +166,11 @@ class SectionColourResidual final : public Residual {
   double density_scale_;
 };
 
-class AutointNerf final : public Problem {
+class AutointNerf final : public Problem,
+                          public SamplesWithSolution,
+                          public KeepsState,
+                          public ReportsProgress,
+                          public RendersViews {
  public:
   explicit AutointNerf(const ProblemContext& context) : scene_(context) {
     const io::ConfigNode render = context.root.child_or_empty("render");
@@ -186,7 +192,15 @@ class AutointNerf final : public Problem {
     render.reject_unknown_keys();
   }
 
-  void watch_field(FieldValues, OutputContext::FieldStreams streams) override { field_ = std::move(streams); }
+  // The sampling network's update: every `sampler.every` steps, on rays of its own.
+  void before_step(long step, const Solution& solution, Random& rng) override {
+    if (!sampler_ || step % sampler_->options().every != 0) return;
+    std::mt19937_64 engine(rng());
+    PixelTargets drawn = scene_.draw_pixels(sampler_->options().rays, engine);
+    scene_.draw_targets(drawn, engine);
+    last_update_ = sampler_->update(drawn.pixels.rays, drawn.target, drawn.background, solution.streams, density_,
+                                    density_scale_);
+  }
   void save_state(io::H5Writer& file) const override {
     if (sampler_) sampler_->save(file, "sampler");
   }
@@ -204,9 +218,9 @@ class AutointNerf final : public Problem {
   bool writes_grid_outputs() const override { return false; }
 
   std::vector<std::pair<std::string, double>> progress_metrics(const OutputContext& context,
-                                                               double steps_per_second) const override {
-    std::vector<std::pair<std::string, double>> figures{
-        {"rays/s", steps_per_second * static_cast<double>(rays_per_step_)}};
+                                                               const TrainingRate& rate) const override {
+    const double rays = rate.groups.empty() ? 0.0 : static_cast<double>(rate.groups[0]);
+    std::vector<std::pair<std::string, double>> figures{{"rays/s", rate.steps_per_second * rays}};
     if (sampler_) {
       figures.emplace_back("sampler_loss", last_update_.loss);
       figures.emplace_back("max_section", last_update_.max_section_share);
@@ -260,9 +274,6 @@ class AutointNerf final : public Problem {
     RaySamples<double> samples;
     if (sampler_) {
       scene_.draw_targets(drawn, engine);
-      if (field_ && draws_ % sampler_->options().every == 0)
-        last_update_ = sampler_->update(pixel_rays, drawn.target, drawn.background, field_, density_, density_scale_);
-      ++draws_;
       batch->sections = sampler_->sections(pixel_rays);
       samples = stratified_in_sections(batch->sections, samples_per_section_, engine);
     } else {
@@ -273,7 +284,6 @@ class AutointNerf final : public Problem {
     }
     batch->target = std::move(drawn.target);
     batch->background = std::move(drawn.background);
-    rays_per_step_ = rays;
 
     TermPoints points;
     const Eigen::MatrixXd directions = integrators::sample_directions(pixel_rays, samples);
@@ -307,7 +317,7 @@ class AutointNerf final : public Problem {
   }
 
   // Section means from Φ at the K + 1 section ends of every ray, composited.
-  RenderRays renderer(const FieldValues& values) const {
+  RenderRays renderer(const Solution::Values& values) const {
     return [this, values](const integrators::Rays<double>& rays, const Eigen::Vector3d& background) {
       const RaySamples<double> sections =
           sampler_ ? sampler_->sections(rays) : integrators::equal_sections(rays, sections_);
@@ -340,13 +350,8 @@ class AutointNerf final : public Problem {
   int samples_per_section_ = 4;
   DensityActivation density_;
   double density_scale_ = 1;
-  // The sampling network and the field it is trained against; mutable because drawing a
-  // batch (a const member the loss term calls) is where it learns, as NeRF's occupancy grid.
-  mutable std::unique_ptr<SectionSampler> sampler_;
-  OutputContext::FieldStreams field_;
-  mutable SamplerUpdate last_update_;
-  mutable long draws_ = 0;
-  mutable Eigen::Index rays_per_step_ = 0;  // of the last batch
+  std::unique_ptr<SectionSampler> sampler_;  // null: equal sections
+  SamplerUpdate last_update_;                // of before_step's last update
 };
 
 }  // namespace

@@ -61,6 +61,7 @@
 #include "io/line_plot.h"
 #include "io/png_image.h"
 #include "io/text.h"
+#include "solvers/problem_capabilities.h"
 #include "solvers/problems/problems.h"
 
 namespace nfield::solvers {
@@ -86,7 +87,7 @@ double snr_db(const Eigen::MatrixXd& fitted, const Eigen::MatrixXd& target) {
   return 10.0 * std::log10(target.squaredNorm() / std::max((fitted - target).squaredNorm(), 1e-300));
 }
 
-class Fit final : public Problem {
+class Fit final : public Problem, public ReportsProgress {
  public:
   explicit Fit(const ProblemContext& context) : domain_({-1.0}, {1.0}) {
     const io::ConfigNode equation = context.root.child("equation");
@@ -151,7 +152,7 @@ class Fit final : public Problem {
   }
 
   std::vector<std::pair<std::string, double>> progress_metrics(const OutputContext& context,
-                                                               double) const override {
+                                                               const TrainingRate&) const override {
     const Eigen::MatrixXf fitted = context.values(coordinates(progress_samples_)).cast<float>();
     Eigen::MatrixXf target(fitted.rows(), fitted.cols());
     for (Eigen::Index k = 0; k < progress_samples_.size(); ++k) target.row(k) = signal_.values.row(progress_samples_(k));

@@ -93,6 +93,7 @@
 
 #include "solvers/conditions/condition_values.h"
 #include "solvers/conditions/conditions.h"
+#include "solvers/problem_capabilities.h"
 #include "solvers/problems/problems.h"
 
 namespace nfield::solvers {
@@ -155,7 +156,7 @@ std::pair<double, double> layer_depth(double x, double lower, double upper, doub
   return {0, 0};
 }
 
-class Helmholtz final : public Problem {
+class Helmholtz final : public Problem, public MasksError {
  public:
   explicit Helmholtz(const ProblemContext& context)
       : domain_(Domain::from_config(context.root.child("domain"))) {

@@ -43,7 +43,7 @@
 //
 // With an occupancy grid, rays are marched at a fixed step through occupied cells only, in
 // training (each sample jittered inside its interval) and in rendering (midpoints); the grid
-// is updated from the field's density every `every` steps (Problem::watch_field) and is
+// is updated from the field's density every `every` steps (before_step) and is
 // rebuilt, not saved, on resume: every cell counts as occupied until the first update.
 //
 // With an encoding that reads variances (integrated_positional, mip-NeRF), each sample is the
@@ -82,6 +82,7 @@
 #include "io/vtk_image.h"
 #include "io/vtk_polydata.h"
 #include "io/png_image.h"
+#include "solvers/problem_capabilities.h"
 #include "solvers/problems/problems.h"
 #include "solvers/problems/radiance_scene.h"
 
@@ -178,7 +179,11 @@ class RayColourResidual final : public Residual {
   DensityActivation density_;
 };
 
-class Nerf final : public Problem {
+class Nerf final : public Problem,
+                   public TakesInputVariances,
+                   public SamplesWithSolution,
+                   public ReportsProgress,
+                   public RendersViews {
  public:
   explicit Nerf(const ProblemContext& context) : scene_(context), box_(scene_.box()) {
     const io::ConfigNode render = context.root.child_or_empty("render");
@@ -195,7 +200,6 @@ class Nerf final : public Problem {
 
   const Domain& domain() const override { return scene_.domain(); }
   int field_input_dim() const override { return variances_ ? 9 : 6; }
-  bool gives_input_variances() const override { return true; }
   void give_input_variances() override {
     variances_ = true;
     // The frustum of one step at the cameras' mean distance, through the central pixel.
@@ -215,13 +219,22 @@ class Nerf final : public Problem {
   std::vector<std::string> output_names() const override { return {"density", "red", "green", "blue"}; }
   int residual_term() const override { return -1; }
   bool writes_grid_outputs() const override { return false; }
-  void watch_field(FieldValues values, OutputContext::FieldStreams) override { field_ = std::move(values); }
+  // The grid is updated at the first draw (a resumed run's too: the grid is not saved) and
+  // every `every` steps after.
+  void before_step(long step, const Solution& solution, Random&) override {
+    solution_ = &solution;
+    if (grid_ && (!grid_updated_ || step % occupancy_.every == 0)) {
+      grid_->update([this](const Eigen::MatrixXd& p) { return density_with(solution_->values, p); }, occupancy_.decay);
+      grid_updated_ = true;
+    }
+  }
 
   std::vector<std::pair<std::string, double>> progress_metrics(
-      const OutputContext& context, double steps_per_second) const override {
-    std::vector<std::pair<std::string, double>> figures{
-        {"rays/s", steps_per_second * static_cast<double>(rays_per_step_)},
-        {"samples/ray", static_cast<double>(samples_per_step_) / std::max<Eigen::Index>(rays_per_step_, 1)}};
+      const OutputContext& context, const TrainingRate& rate) const override {
+    const double rays = rate.groups.empty() ? 0.0 : static_cast<double>(rate.groups[0]);
+    const double samples = rate.points.empty() ? 0.0 : static_cast<double>(rate.points[0]);
+    std::vector<std::pair<std::string, double>> figures{{"rays/s", rate.steps_per_second * rays},
+                                                        {"samples/ray", samples / std::max(rays, 1.0)}};
     for (auto& figure : scene_.progress_psnr(renderer(context, grid_.get()))) figures.push_back(std::move(figure));
     return figures;
   }
@@ -305,7 +318,7 @@ class Nerf final : public Problem {
 
   // σ at points (N × 3): the density does not depend on the direction, any will do; with
   // variances, a typical sample's (give_input_variances).
-  Eigen::VectorXd density_with(const FieldValues& values, const Eigen::MatrixXd& points) const {
+  Eigen::VectorXd density_with(const Solution::Values& values, const Eigen::MatrixXd& points) const {
     Eigen::MatrixXd x(points.rows(), field_input_dim());
     x.leftCols(3) = points;
     x.middleCols(3, 3).setZero();
@@ -313,26 +326,21 @@ class Nerf final : public Problem {
     if (variances_) x.rightCols(3).setConstant(point_variance_);
     return values(x).col(0).unaryExpr([this](double s) { return density_.value(s); });
   }
-  Eigen::VectorXd density_at(const Eigen::MatrixXd& points) const { return density_with(field_, points); }
 
   TermPoints draw(Random& rng, Eigen::Index rays) const {
     std::mt19937_64 engine(rng());
     PixelTargets drawn = scene_.draw_pixels(rays, engine);
     const integrators::Rays<double>& pixel_rays = drawn.pixels.rays;
     auto batch = std::make_shared<RayBatch>();
-    rays_per_step_ = rays;
-    if (grid_ && field_) {
-      if (draws_ % occupancy_.every == 0)
-        grid_->update([this](const Eigen::MatrixXd& p) { return density_at(p); }, occupancy_.decay);
-      ++draws_;
+    if (grid_ && grid_updated_) {
       batch->samples = grid_->march(pixel_rays, occupancy_.march);
       // Each sample anywhere in its interval, so that training sees all of it.
       for (Eigen::Index i = 0; i < batch->samples.size(); ++i)
         batch->samples.t(i) += (static_cast<double>(engine() >> 11) * 0x1.0p-53 - 0.5) * batch->samples.delta(i);
     } else {
       batch->samples = integrators::stratified_samples(pixel_rays, {samples_, true}, engine);
-      if (importance_ > 0 && field_)
-        batch->samples = refined(field_, pixel_rays, batch->samples, drawn.pixels.background, false, engine);
+      if (importance_ > 0 && solution_)
+        batch->samples = refined(solution_->values, pixel_rays, batch->samples, drawn.pixels.background, false, engine);
     }
     scene_.draw_targets(drawn, engine);
     batch->target = std::move(drawn.target);
@@ -340,14 +348,13 @@ class Nerf final : public Problem {
     TermPoints points;
     points.x = sample_inputs(pixel_rays, batch->samples, variances_);
     points.groups = batch->samples.offsets;
-    samples_per_step_ = batch->samples.size();
     points.context = std::move(batch);
     return points;
   }
 
   // The coarse samples and `importance_` more per ray drawn from their rendering weights with
   // the field `values` (deterministic: at the inverse CDF's midpoints), merged in order.
-  RaySamples<double> refined(const FieldValues& values, const integrators::Rays<double>& rays,
+  RaySamples<double> refined(const Solution::Values& values, const integrators::Rays<double>& rays,
                              const RaySamples<double>& coarse, const Eigen::Vector3d& background,
                              bool deterministic, std::mt19937_64& engine) const {
     const Shading coarse_shading = shade(values(sample_inputs(rays, coarse, variances_)), density_);
@@ -400,9 +407,8 @@ class Nerf final : public Problem {
   DensityActivation density_;
   OccupancySettings occupancy_;
   std::unique_ptr<integrators::OccupancyGrid> grid_;  // null: stratified samples
-  FieldValues field_;                                 // the field in training
-  mutable long draws_ = 0;                            // batches drawn (grid updates)
-  mutable Eigen::Index rays_per_step_ = 0, samples_per_step_ = 0;  // of the last batch
+  const Solution* solution_ = nullptr;                // the field in training (before_step)
+  bool grid_updated_ = false;                         // since this problem was built
 };
 
 }  // namespace

@@ -45,6 +45,11 @@
 #include "solvers/problems/radiance_scene.h"
 #include "solvers/training/adam.h"
 
+namespace nfield::io {
+class H5Writer;
+class H5Reader;
+}  // namespace nfield::io
+
 namespace nfield::solvers {
 
 struct SectionSamplerOptions {

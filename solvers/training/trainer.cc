@@ -106,6 +106,7 @@ void Trainer<Scalar>::set_points(size_t k) {
 
 template <typename Scalar>
 void Trainer<Scalar>::resample() {
+  if (callbacks_ && callbacks_->before_draw) callbacks_->before_draw(global_step_, rng_);
   for (size_t k = 0; k < terms_.size(); ++k) {
     // A term with no batch key draws its own set (measurements: all of them, every step).
     points_[k] = sample(k, terms_[k].batch_key.empty() ? 0 : options_.batch.at(terms_[k].batch_key));
@@ -285,6 +286,10 @@ Progress Trainer<Scalar>::progress(double lr) const {
   // A time budget ends the stage first when it is shorter than its steps would take.
   if (time_budget_ > 0) p.eta_seconds = std::min(p.eta_seconds, std::max(0.0, time_budget_ - elapsed));
   p.later_stages = static_cast<int>(options_.stages.size()) - 1 - stage_;
+  for (const TermPoints& points : points_) {
+    p.term_points.push_back(points.x.rows());
+    p.term_groups.push_back(points.groups.empty() ? 0 : static_cast<Eigen::Index>(points.groups.size()) - 1);
+  }
   return p;
 }
 

@@ -75,6 +75,8 @@ struct Progress {
   double eta_seconds = 0;
   int later_stages = 0;  // stages after the current one
   std::vector<std::pair<std::string, double>> extras;  // e.g. the minimum causal weight
+  // Per loss term, of its last batch: the points, and the groups of them (rays; 0: none).
+  std::vector<Eigen::Index> term_points, term_groups;
 };
 
 // How a stage ended, for progress lines and metrics.json.
@@ -114,6 +116,10 @@ class Trainer {
     // A line to show beside the progress lines: why a stage ended early, a retry after a
     // non-finite step.
     std::function<void(const std::string&)> notice;
+    // Before each draw of new points, with the steps done and the trainer's engine: where a
+    // problem that samples where the field is updates what its draws read
+    // (SamplesWithSolution, solvers/problem_capabilities.h). Every rank's run needs it.
+    std::function<void(long step, Random& rng)> before_draw;
   };
 
   // `communicator` (not owned; null: world_communicator()) splits each step over its ranks.

@@ -16,6 +16,7 @@
 
 #include "autodiff/sequential.h"
 #include "io/png_image.h"
+#include "solvers/problem_capabilities.h"
 #include "solvers/run.h"
 #include "tests/testing/best_constant.h"
 #include "tests/testing/config_errors.h"
@@ -69,13 +70,17 @@ TEST(Nerf, ImportanceSamplesFollowTheFieldsWeights) {
   text.replace(text.find("render: {samples: 16}"), 21, "render: {samples: 16, importance: 8}");
   RunSetup setup = load_run(testutil::write_config("nerf", text), {});
   // A field that is dense only in the slab |x| < 0.05: the fine samples gather there.
-  setup.problem->watch_field([](const Eigen::MatrixXd& x) {
+  Solution slab;
+  slab.values = [](const Eigen::MatrixXd& x) {
     Eigen::MatrixXd out = Eigen::MatrixXd::Zero(x.rows(), 4);
     out.col(0) = (x.col(0).array().abs() < 0.05).select(Eigen::VectorXd::Constant(x.rows(), 5.0),
                                                          Eigen::VectorXd::Constant(x.rows(), -20.0));
     return out;
-  }, nullptr);
+  };
   Random rng(7);
+  auto* sampling = capability<SamplesWithSolution>(*setup.problem);
+  ASSERT_NE(sampling, nullptr);
+  sampling->before_step(0, slab, rng);
   const TermPoints points = setup.problem->loss_terms()[0].sample(rng, 32);
   int crossing = 0, in_slab = 0, fine_total = 0;
   for (size_t r = 0; r + 1 < points.groups.size(); ++r) {
