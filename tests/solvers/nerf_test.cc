@@ -107,6 +107,45 @@ TEST(Nerf, ImportanceSamplesFollowTheFieldsWeights) {
                                  {5, 22, "render.importance", "occupancy"});
 }
 
+// Sampling is a pure function of the engine and the problem's state: the occupancy grid
+// changes only in before_step (on the first call and every `every` steps), never in a draw.
+TEST(Nerf, DrawsArePureBetweenGridUpdates) {
+  std::string text = nerf_config(bunny_data(), "output: {dir: unused}\n");
+  text.replace(text.find("render: {samples: 16}"), 21, "render: {occupancy: {resolution: 8, every: 4, decay: 0}}");
+  RunSetup setup = load_run(testutil::write_config("nerf_pure", text), {});
+  auto* sampling = capability<SamplesWithSolution>(*setup.problem);
+  ASSERT_NE(sampling, nullptr);
+  double inside = 5;  // the density (before its activation) in the ball |x| < 0.3; −20 outside
+  Solution field;
+  field.values = [&inside](const Eigen::MatrixXd& x) {
+    Eigen::MatrixXd out = Eigen::MatrixXd::Zero(x.rows(), 4);
+    out.col(0) = (x.leftCols(3).rowwise().norm().array() < 0.3)
+                     .select(Eigen::VectorXd::Constant(x.rows(), inside), Eigen::VectorXd::Constant(x.rows(), -20.0));
+    return out;
+  };
+  const LossTerm term = setup.problem->loss_terms()[0];
+  const auto draw = [&term](std::uint64_t seed) {
+    Random rng(seed);
+    return term.sample(rng, 64);
+  };
+  Random unused(1);
+  sampling->before_step(0, field, unused);  // the first call builds the grid: a ball of σ > 0
+  const TermPoints first = draw(11), again = draw(11);
+  ASSERT_GT(first.x.rows(), 0);
+  EXPECT_EQ(first.x, again.x);
+  EXPECT_EQ(first.groups, again.groups);
+  // Samples only inside the occupied ball's cells (8³ cells of 0.15: within 0.3 + a cell's diagonal).
+  EXPECT_LT(first.x.leftCols(3).rowwise().norm().maxCoeff(), 0.3 + 0.27);
+  // The field empties; steps 1 and 3 are not updates (every: 4): the draws stay the same.
+  inside = -20;
+  sampling->before_step(1, field, unused);
+  EXPECT_EQ(draw(11).x, first.x);
+  sampling->before_step(3, field, unused);
+  EXPECT_EQ(draw(11).x, first.x);
+  sampling->before_step(4, field, unused);  // an update (decay 0: the grid holds the new field only)
+  EXPECT_NE(draw(11).x.rows(), first.x.rows());
+}
+
 TEST(Nerf, ShortTrainingLowersTheLossAndWritesTestViews) {
   const auto dir = testutil::scratch_dir("nerf");
   const auto config = testutil::write_config(
