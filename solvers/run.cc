@@ -257,6 +257,42 @@ void report_unknowns(Trainer<Scalar>& trainer, const std::filesystem::path& dir,
   std::printf("%s\n", unknowns_line(*unknowns).c_str());
 }
 
+// The output folder with the resolved config in it, before training.
+void start_output(const std::filesystem::path& dir, const std::string& config_text, int ranks) {
+  std::filesystem::create_directories(dir);
+  io::write_atomically(dir / "config.yaml", [&](const std::filesystem::path& p) { std::ofstream(p) << config_text << "\n"; });
+  if (ranks > 1) std::printf("training over %d MPI ranks, each step's points split between them\n", ranks);
+}
+
+// Rank 0's callbacks: progress lines with the problem's own figures (refreshed at most every
+// 10 s: they may render), the error after each stage, and checkpoints.
+template <typename Scalar>
+void add_root_callbacks(typename Trainer<Scalar>::Callbacks& callbacks, ProgressPrinter& printer,
+                        const RunSetup& setup, const OutputContext& context, const Solution& solution,
+                        std::function<void()> checkpoint) {
+  const auto* reports = capability<ReportsProgress>(*setup.problem);
+  callbacks.progress = [&printer, &context, reports, figures = std::vector<std::pair<std::string, double>>{},
+                        figured = std::chrono::steady_clock::now()](const Progress& p) mutable {
+    if (reports && std::chrono::steady_clock::now() - figured >= std::chrono::seconds(10)) {
+      figures = reports->progress_metrics(context, {p.steps_per_second, p.term_points, p.term_groups});
+      figured = std::chrono::steady_clock::now();
+    }
+    if (figures.empty()) return printer.step(p);
+    Progress shown = p;
+    shown.extras.insert(shown.extras.end(), figures.begin(), figures.end());
+    printer.step(shown);
+  };
+  callbacks.stage_begins = [&printer](const Progress& p) { printer.stage_begins(p); };
+  callbacks.notice = [&printer](const std::string& line) { printer.notice(line); };
+  callbacks.stage_error = [&setup, &context, &solution] {
+    if (const std::optional<double> error = setup.problem->reported_error(context)) return *error;
+    return setup.problem->has_exact() && setup.problem->writes_grid_outputs()
+               ? grid_error(*setup.problem, solution.streams, setup.output).rel_l2
+               : std::numeric_limits<double>::quiet_NaN();
+  };
+  callbacks.checkpoint = std::move(checkpoint);
+}
+
 template <typename Scalar>
 int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
   const std::filesystem::path dir = setup.output.dir;
@@ -271,15 +307,7 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
   Trainer<Scalar> trainer(*setup.problem, field, setup.training, &communicator);
   if (!resume.empty()) resume_from(resume, setup, field, trainer, root);
   const long first_step = trainer.step();
-  if (root) {
-    std::filesystem::create_directories(dir);
-    io::write_atomically(dir / "config.yaml", [&](const std::filesystem::path& p) {
-      std::ofstream(p) << config_text << "\n";
-    });
-    if (communicator.size() > 1)
-      std::printf("training over %d MPI ranks, each step's points split between them\n",
-                  communicator.size());
-  }
+  if (root) start_output(dir, config_text, communicator.size());
 
   // The field as everything after training sees it, wrapped once: with hard conditions
   // u = A + D·N, not the network N.
@@ -305,32 +333,9 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
       communicator.any(false);
       return finished ? 0 : trainer.divergence() ? kExitDiverged : 130;
     }
-    // The problem's own progress figures, refreshed at most every 10 s (they may render).
-    std::vector<std::pair<std::string, double>> problem_figures;
-    auto figured = std::chrono::steady_clock::now();
-    callbacks.progress = [&](const Progress& p) {
-      const auto now = std::chrono::steady_clock::now();
-      if (now - figured >= std::chrono::seconds(10)) {
-        if (const auto* reports = capability<ReportsProgress>(*setup.problem))
-          problem_figures = reports->progress_metrics(context, {p.steps_per_second, p.term_points, p.term_groups});
-        figured = std::chrono::steady_clock::now();
-      }
-      if (problem_figures.empty()) return printer.step(p);
-      Progress shown = p;
-      shown.extras.insert(shown.extras.end(), problem_figures.begin(), problem_figures.end());
-      printer.step(shown);
-    };
-    callbacks.stage_begins = [&printer](const Progress& p) { printer.stage_begins(p); };
-    callbacks.notice = [&printer](const std::string& line) { printer.notice(line); };
-    callbacks.stage_error = [&] {
-      if (const std::optional<double> error = setup.problem->reported_error(context)) return *error;
-      return setup.problem->has_exact() && setup.problem->writes_grid_outputs()
-                 ? grid_error(*setup.problem, solution.streams, setup.output).rel_l2
-                 : std::numeric_limits<double>::quiet_NaN();
-    };
-    callbacks.checkpoint = [&] {
+    add_root_callbacks<Scalar>(callbacks, printer, setup, context, solution, [&] {
       write_checkpoint(dir / "checkpoint.h5", field, trainer, *setup.problem, config_text, config_dir);
-    };
+    });
     finished = trainer.run(callbacks);
   }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
