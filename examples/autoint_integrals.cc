@@ -26,6 +26,26 @@
 
 using namespace nfield;
 
+// 3. Train on new uniform points every step (x is the batch the loss reads).
+void train(fields::Field<double>& field, const autodiff::StreamLayout& layout, const autodiff::StreamLoss<double>& loss,
+           Eigen::MatrixXd& x, int steps, double lr, std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> uniform(-1, 1);
+  solvers::Adam<double> adam(field.parameter_count(), {lr});
+  autodiff::Vector<double> gradient(field.parameter_count());
+  const auto start = std::chrono::steady_clock::now();
+  for (int step = 1; step <= steps; ++step) {
+    for (Eigen::Index i = 0; i < x.rows(); ++i) x(i, 0) = uniform(rng);
+    gradient.setZero();
+    const double mse = field.value_and_gradient(field.parameters().data(), layout, autodiff::Batch<double>{x}, loss,
+                                                gradient.data());
+    const double rate = lr * 0.5 * (1 + std::cos(M_PI * (step - 1) / steps));  // cosine schedule
+    adam.step(field.parameters().data(), gradient.data(), rate);
+    if (step == 1 || step % std::max(1, steps / 10) == 0 || step == steps)
+      std::printf("step %5d  loss %.3e  (%.1f s)\n", step, mse,
+                  std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  }
+}
+
 int main(int argc, char** argv) {
   int steps = 3000, batch = 512, intervals = 1000;
   double k = 10, lr = 2e-3, max_error = 1;
@@ -49,7 +69,6 @@ int main(int argc, char** argv) {
   options.first_omega = k;
   options.hidden_omega = 1;
   fields::Field<double> field(options);
-  solvers::Adam<double> adam(field.parameter_count(), {lr});
 
   // 2. The loss reads the tangent stream along x (stream 1 of the gradient layout), not the
   //    value: L = (1/N) Σ (∂Φ/∂x − f)², whose adjoint goes to that stream only.
@@ -63,22 +82,10 @@ int main(int argc, char** argv) {
     return r.squaredNorm() / static_cast<double>(batch);
   });
 
-  // 3. Train on new uniform points every step.
+  // 3. Train on new uniform points every step (train above).
   std::mt19937_64 rng(0);
+  train(field, gradient_layout, loss, x, steps, lr, rng);
   std::uniform_real_distribution<double> uniform(-1, 1);
-  autodiff::Vector<double> gradient(field.parameter_count());
-  const auto start = std::chrono::steady_clock::now();
-  for (int step = 1; step <= steps; ++step) {
-    for (int i = 0; i < batch; ++i) x(i, 0) = uniform(rng);
-    gradient.setZero();
-    const double mse = field.value_and_gradient(field.parameters().data(), gradient_layout,
-                                                autodiff::Batch<double>{x}, loss, gradient.data());
-    const double rate = lr * 0.5 * (1 + std::cos(M_PI * (step - 1) / steps));  // cosine schedule
-    adam.step(field.parameters().data(), gradient.data(), rate);
-    if (step == 1 || step % std::max(1, steps / 10) == 0 || step == steps)
-      std::printf("step %5d  loss %.3e  (%.1f s)\n", step, mse,
-                  std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-  }
 
   // 4. Integrals over random intervals from Φ's values at their ends.
   Eigen::MatrixXd a(intervals, 1), b(intervals, 1);

@@ -47,6 +47,35 @@ Eigen::MatrixXf sample_inputs(const integrators::Rays<double>& rays,
   return x.cast<float>();
 }
 
+// 3. The loss over rays: each ray is a group of consecutive samples. In a block, render
+//    the rays that start there and pass the rendering adjoint back to σ and c, then
+//    through the output activations to the raw outputs. It reads the step's samples and
+//    target pixels, which the training loop replaces every step.
+autodiff::LambdaLoss<float> ray_loss(const integrators::RaySamples<double>& samples, const Eigen::MatrixXd& target) {
+  return autodiff::LambdaLoss<float>([&samples, &target](Eigen::Index first, const autodiff::StreamLayout&,
+                                       const autodiff::Streams<float>& out,
+                                       autodiff::Streams<float>& adjoint) {
+    const auto [k0, k1] = autodiff::groups_in_block(samples.offsets, first, out.points);
+    const auto block = integrators::ray_range(samples, static_cast<Eigen::Index>(k0), static_cast<Eigen::Index>(k1));
+    const Eigen::Index begin = samples.offsets[k0], n = block.size();
+    const Eigen::MatrixXd raw = out.stream(0).middleRows(begin - first, n).cast<double>();
+    const Eigen::VectorXd sigma = raw.col(0).unaryExpr(&density);
+    const Eigen::MatrixXd rgb = raw.rightCols(3).unaryExpr(&integrators::colour_activation);
+    const Eigen::MatrixXd white = Eigen::MatrixXd::Ones(1, 3);
+    const auto image = integrators::render<double>(block, sigma, rgb, white);
+    const Eigen::MatrixXd r = image.color - target.middleRows(k0, k1 - k0);
+    const double scale = 1.0 / static_cast<double>(target.rows());
+    integrators::RenderAdjoint<double> bar{2 * scale * r, {}, {}};
+    Eigen::VectorXd sigma_bar(n);
+    Eigen::MatrixXd rgb_bar(n, 3);
+    integrators::render_backward<double>(block, sigma, rgb, white, bar, sigma_bar, rgb_bar);
+    auto raw_bar = adjoint.stream(0).middleRows(begin - first, n);
+    raw_bar.col(0) = (sigma_bar.array() * raw.col(0).unaryExpr(&density_derivative).array()).cast<float>();
+    raw_bar.rightCols(3) = (rgb_bar.array() * rgb.array() * (1 - rgb.array())).cast<float>();
+    return scale * r.squaredNorm();
+  });
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -82,33 +111,10 @@ int main(int argc, char** argv) {
   fields::Field<float> field(options);
   solvers::Adam<float> adam(field.parameter_count(), {lr});
 
-  // 3. The loss over rays: each ray is a group of consecutive samples. In a block, render
-  //    the rays that start there and pass the rendering adjoint back to σ and c, then
-  //    through the output activations to the raw outputs.
+  // 3. The loss over rays (ray_loss above).
   integrators::RaySamples<double> samples;
   Eigen::MatrixXd target;
-  autodiff::LambdaLoss<float> loss([&](Eigen::Index first, const autodiff::StreamLayout&,
-                                       const autodiff::Streams<float>& out,
-                                       autodiff::Streams<float>& adjoint) {
-    const auto [k0, k1] = autodiff::groups_in_block(samples.offsets, first, out.points);
-    const auto block = integrators::ray_range(samples, static_cast<Eigen::Index>(k0), static_cast<Eigen::Index>(k1));
-    const Eigen::Index begin = samples.offsets[k0], n = block.size();
-    const Eigen::MatrixXd raw = out.stream(0).middleRows(begin - first, n).cast<double>();
-    const Eigen::VectorXd sigma = raw.col(0).unaryExpr(&density);
-    const Eigen::MatrixXd rgb = raw.rightCols(3).unaryExpr(&integrators::colour_activation);
-    const Eigen::MatrixXd white = Eigen::MatrixXd::Ones(1, 3);
-    const auto image = integrators::render<double>(block, sigma, rgb, white);
-    const Eigen::MatrixXd r = image.color - target.middleRows(k0, k1 - k0);
-    const double scale = 1.0 / static_cast<double>(target.rows());
-    integrators::RenderAdjoint<double> bar{2 * scale * r, {}, {}};
-    Eigen::VectorXd sigma_bar(n);
-    Eigen::MatrixXd rgb_bar(n, 3);
-    integrators::render_backward<double>(block, sigma, rgb, white, bar, sigma_bar, rgb_bar);
-    auto raw_bar = adjoint.stream(0).middleRows(begin - first, n);
-    raw_bar.col(0) = (sigma_bar.array() * raw.col(0).unaryExpr(&density_derivative).array()).cast<float>();
-    raw_bar.rightCols(3) = (rgb_bar.array() * rgb.array() * (1 - rgb.array())).cast<float>();
-    return scale * r.squaredNorm();
-  });
+  autodiff::LambdaLoss<float> loss = ray_loss(samples, target);
 
   // 4. Train: new random rays and jittered samples every step.
   const autodiff::StreamLayout values(autodiff::StreamSpec::values(6));
