@@ -1,0 +1,11 @@
+// SPDX-License-Identifier: MIT
+#include "solvers/problem_capabilities.h"
+
+namespace nfield::solvers {
+
+Eigen::Array<bool, Eigen::Dynamic, 1> error_mask(const Problem& problem, const Eigen::MatrixXd& x) {
+  if (const auto* masks = capability<MasksError>(problem)) return masks->error_mask(x);
+  return Eigen::Array<bool, Eigen::Dynamic, 1>::Constant(x.rows(), true);
+}
+
+}  // namespace nfield::solvers
