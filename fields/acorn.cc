@@ -75,6 +75,13 @@ std::shared_ptr<BlockTree> acorn_tree(FieldOptions& o) {
   return own->tree;
 }
 
+void restore_block_tree(const FieldOptions& saved, const FieldOptions& live) {
+  const auto* from = std::any_cast<AcornOptions>(&saved.extension);
+  const auto* to = std::any_cast<AcornOptions>(&live.extension);
+  if (!from || !to || !from->tree || !to->tree) return;
+  to->tree->set_blocks(from->tree->blocks());
+}
+
 template <typename Scalar>
 AcornEncoding<Scalar>::AcornEncoding(const FieldOptions& options) {
   const AcornOptions& a = acorn_options(options);

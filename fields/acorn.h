@@ -73,6 +73,10 @@ struct AcornOptions {
 const AcornOptions& acorn_options(const FieldOptions& o);
 // The tree of an acorn field, made at the initial level when the options carry none.
 std::shared_ptr<BlockTree> acorn_tree(FieldOptions& o);
+// Resuming: the blocks of `saved` (a field loaded from a checkpoint) into the tree of `live`
+// (the field built from the config), when both are acorn fields; std::invalid_argument when
+// the config's max_level cannot hold them.
+void restore_block_tree(const FieldOptions& saved, const FieldOptions& live);
 
 template <typename Scalar>
 class AcornEncoding final : public autodiff::Module<Scalar> {
