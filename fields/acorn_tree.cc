@@ -54,18 +54,18 @@ void BlockTree::set_blocks(std::vector<Block> blocks) {
         throw std::invalid_argument("acorn block tree: block index " + std::to_string(b.index[static_cast<size_t>(j)]) +
                                     " outside its level " + std::to_string(b.level));
   }
+  lookup_ = lookup_of(blocks);
   blocks_ = std::move(blocks);
-  rebuild();
   ++version_;
 }
 
-void BlockTree::rebuild() {
+std::vector<std::int32_t> BlockTree::lookup_of(const std::vector<Block>& blocks) const {
   const int cells = 1 << max_level_;
   std::int64_t total = 1;
   for (int j = 0; j < dim_; ++j) total *= cells;
-  lookup_.assign(static_cast<size_t>(total), -1);
-  for (size_t b = 0; b < blocks_.size(); ++b) {
-    const Block& k = blocks_[b];
+  std::vector<std::int32_t> lookup(static_cast<size_t>(total), -1);
+  for (size_t b = 0; b < blocks.size(); ++b) {
+    const Block& k = blocks[b];
     const int span = 1 << (max_level_ - k.level);  // finest cells per block edge
     std::int64_t count = 1;
     for (int j = 0; j < dim_; ++j) count *= span;
@@ -73,13 +73,14 @@ void BlockTree::rebuild() {
       std::int64_t rest = c, cell = 0, stride = 1;
       for (int j = 0; j < dim_; ++j, rest /= span, stride *= cells)
         cell += (k.index[static_cast<size_t>(j)] * static_cast<std::int64_t>(span) + rest % span) * stride;
-      std::int32_t& slot = lookup_[static_cast<size_t>(cell)];
+      std::int32_t& slot = lookup[static_cast<size_t>(cell)];
       if (slot >= 0) throw std::invalid_argument("acorn block tree: blocks overlap");
       slot = static_cast<std::int32_t>(b);
     }
   }
-  for (std::int32_t slot : lookup_)
+  for (std::int32_t slot : lookup)
     if (slot < 0) throw std::invalid_argument("acorn block tree: the blocks leave a gap");
+  return lookup;
 }
 
 }  // namespace nfield::fields

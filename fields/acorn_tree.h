@@ -49,8 +49,8 @@ class BlockTree {
   // Bumped by every set_blocks: a pass or a sampler can tell the layout changed.
   std::uint64_t version() const { return version_; }
 
-  // Replaces the leaves; throws std::invalid_argument unless they tile the cube exactly
-  // (no gap, no overlap) within max_level.
+  // Replaces the leaves; throws std::invalid_argument, the tree unchanged, unless they tile
+  // the cube exactly (no gap, no overlap) within max_level.
   void set_blocks(std::vector<Block> blocks);
 
   // The leaf holding u ∈ [0, 1]^d (clamped into the cube; NaN goes to cell 0).
@@ -74,7 +74,8 @@ class BlockTree {
   double volume(int b) const;
 
  private:
-  void rebuild();
+  // The lookup table of `blocks`; throws std::invalid_argument for a gap or an overlap.
+  std::vector<std::int32_t> lookup_of(const std::vector<Block>& blocks) const;
   int dim_, max_level_;
   std::vector<Block> blocks_;
   std::vector<std::int32_t> lookup_;

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -15,6 +16,7 @@
 
 #include "cli_test_support.h"
 #include "io/hdf5_file.h"
+#include "io/vtk_polydata.h"
 
 namespace nfield::apps::testing {
 namespace {
@@ -41,7 +43,26 @@ TEST(AcornRunTest, ReallocatesWritesItsBlocksAndResumes) {
   EXPECT_GT(straight["acorn_splits"].get<double>(), 0);  // the blocks moved
   EXPECT_LE(straight["acorn_blocks"].get<double>(), 40);
   EXPECT_NE(o.out.find("blocks "), std::string::npos) << "no block count in the progress lines";
-  EXPECT_TRUE(std::filesystem::exists(dir / "straight" / "blocks.vtp"));
+  {
+    // Four corners, two triangles and four edges a block; its level and error on its corners.
+    const io::PolyData blocks = io::read_vtp(dir / "straight" / "blocks.vtp");
+    const auto count = static_cast<Eigen::Index>(straight["acorn_blocks"].get<double>());
+    EXPECT_EQ(blocks.points.rows(), 4 * count);
+    EXPECT_EQ(blocks.triangles.rows(), 2 * count);
+    EXPECT_EQ(blocks.lines.rows(), 4 * count);
+    ASSERT_TRUE(blocks.arrays.count("level") && blocks.arrays.count("error"));
+    EXPECT_GT(blocks.arrays.at("level").maxCoeff(), 2);
+    EXPECT_GT(blocks.arrays.at("error").maxCoeff(), 0);
+    // The blocks cover the picture's box [−1, 1]² and nothing else: their areas add up to 4.
+    double area = 0;
+    for (Eigen::Index t = 0; t < blocks.triangles.rows(); ++t) {
+      const Eigen::Vector2d a = blocks.points.row(blocks.triangles(t, 0)).head<2>();
+      const Eigen::Vector2d b = blocks.points.row(blocks.triangles(t, 1)).head<2>();
+      const Eigen::Vector2d c = blocks.points.row(blocks.triangles(t, 2)).head<2>();
+      area += 0.5 * std::abs((b - a).x() * (c - a).y() - (b - a).y() * (c - a).x());
+    }
+    EXPECT_NEAR(area, 4.0, 1e-9);
+  }
   {
     const io::H5Reader checkpoint(dir / "straight" / "checkpoint.h5");
     const auto levels = checkpoint.read_attribute<std::vector<std::int64_t>>("field", "acorn_block_level");

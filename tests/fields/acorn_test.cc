@@ -49,6 +49,8 @@ TEST(AcornTree, TilesAndLocates) {
   std::vector<Block> overlap = split_corner();
   overlap.push_back({1, {1, 1, 0}});
   EXPECT_THROW(tree.set_blocks(overlap), std::invalid_argument);
+  EXPECT_EQ(tree.blocks().size(), 7u);  // a refused layout leaves the tree as it was
+  EXPECT_EQ(tree.blocks()[static_cast<size_t>(tree.locate(inside))].index[0], 3);
   EXPECT_THROW(BlockTree(2, 11, 1), std::invalid_argument);
 }
 
