@@ -9,13 +9,13 @@
 //   split   2^d blocks,  cost β E_i            (not at max_level)
 //   merge   with its 2^d siblings into their parent: 1 block for the group, cost Σ_sib E / β
 //           (only when all 2^d siblings are active leaves and all of them merge)
-// and frozen leaves keep (1 block, cost E_i). β = split_factor ∈ (0, 1) is the model of how a
-// block's error changes with its size: splitting spreads the same feature grid over 2^−d of
-// the volume per child, and ACORN's paper estimates the children's error from the parent's
-// the same way, and merging is its inverse. Minimise Σ cost subject to Σ blocks ≤ budget.
-// This is the paper's integer program (one-hot choice per block, the sibling-consistency
-// constraint for merges, one knapsack row for the budget); its α weighting of the split and
-// merge terms is β here, with one knob.
+// and frozen leaves keep (1 block, cost E_i). β = split_factor ∈ (0, 1) models how a block's
+// error changes with its size: each child gets a whole feature grid for 2^−d of the volume,
+// so its error is taken as a fixed fraction of the parent's, and merging is the inverse.
+// Minimise Σ cost subject to Σ blocks ≤ budget. This has the structure of the paper's
+// integer program (a one-hot choice per block, the constraint that siblings merge together,
+// one knapsack row for the budget); the paper's own weighting of the split and merge terms
+// is replaced here by the single factor β (a modelling choice, not taken from the paper).
 //
 // The solution. Group the leaves into items that do not interact: a complete sibling group
 // (2^d active leaves of one parent) is one item with options "merge" (1 block) or any
