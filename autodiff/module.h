@@ -45,6 +45,11 @@ class Module {
     return false;
   }
 
+  // Throws std::invalid_argument when the module cannot compute `layout`'s streams (a field
+  // that gives the value and gradient only, fields/acorn.h). Sequential calls it before each
+  // pass, outside its threads, where an exception can still reach the caller.
+  virtual void check_layout(const StreamLayout& layout) const { (void)layout; }
+
   // out = f(in) for all streams. When `saved` is not null, keep there what backward reads.
   virtual void forward(const StreamLayout& layout, const Scalar* params,
                        const Streams<Scalar>& in, Streams<Scalar>& out,

@@ -157,6 +157,7 @@ void Sequential<Scalar>::evaluate(const Scalar* params, const StreamLayout& layo
                                   const Batch<Scalar>& batch, Streams<Scalar>& out) const {
   if (modules_.empty()) throw std::logic_error("Sequential::evaluate: no modules");
   check_batch(layout, batch, input_width());
+  for (const auto& m : modules_) m->check_layout(layout);
   const Eigen::Index n = batch.points.rows();
   const std::vector<Eigen::Index> starts = block_starts(n, batch.groups);
   const auto blocks = static_cast<Eigen::Index>(starts.size()) - 1;
@@ -186,6 +187,7 @@ double Sequential<Scalar>::value_and_gradient(const Scalar* params, const Stream
                                               Scalar* gradient) const {
   if (modules_.empty()) throw std::logic_error("Sequential::value_and_gradient: no modules");
   check_batch(layout, batch, input_width());
+  for (const auto& m : modules_) m->check_layout(layout);
   const std::vector<Eigen::Index> starts = block_starts(batch.points.rows(), batch.groups);
   const auto blocks = static_cast<Eigen::Index>(starts.size()) - 1;
   const int threads = thread_count(options_.threads);
@@ -231,6 +233,7 @@ void Sequential<Scalar>::residuals_and_jacobian(const Scalar* params, const Stre
                                                 Scalar* residuals, Scalar* jacobian) const {
   if (modules_.empty()) throw std::logic_error("Sequential::residuals_and_jacobian: no modules");
   check_batch(layout, batch, input_width());
+  for (const auto& m : modules_) m->check_layout(layout);
   const Eigen::Index n = batch.points.rows(), block = options_.block_points, p = parameter_count_;
   const Eigen::Index blocks = (n + block - 1) / block;
   const int threads = thread_count(options_.threads);

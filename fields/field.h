@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 //
 // A field f_θ: R^d → R^m, a coordinate network with one flat parameter vector θ, built by its
-// field type (fields/field_type.h: siren, mlp, nerf, bacon, and types registered from outside).
+// field type (fields/field_type.h: siren, mlp, nerf, bacon, acorn, and types registered from outside).
 //
 // Encodings with parameters (hash_grid) draw their own initialization (Module::initialize),
 // from the same engine, before the dense layers.

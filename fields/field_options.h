@@ -14,6 +14,8 @@
 //
 //   bacon  a multiplicative filter network with band-limited outputs, one per scale
 //          (fields/bacon.h; its keys: fields/bacon_type.cc).
+//   acorn  adaptive blocks: a coordinate encoder gives each block of a quadtree/octree a
+//          feature grid, a small decoder reads it (fields/acorn.h; keys: fields/acorn_type.cc).
 //
 // `hidden` lists the H hidden widths: the SIREN reference network of the paper, d → 256,
 // three 256 → 256 layers and 256 → 1, is hidden = [256, 256, 256, 256].
@@ -30,7 +32,7 @@
 namespace nfield::fields {
 
 struct FieldOptions {
-  std::string type = "siren";         // a registered field type: siren | mlp | nerf | bacon | …
+  std::string type = "siren";         // a registered field type: siren | mlp | nerf | bacon | acorn | …
   int input_dim = 2;                  // ≥ 1 (nerf: 6)
   int output_dim = 1;                 // ≥ 1
   std::vector<int> hidden{256, 256, 256, 256};

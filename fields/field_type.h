@@ -2,7 +2,7 @@
 //
 // One registered field type: everything the program does that depends on `field.type`. The
 // registry (field_type(), fields/field_types.cc) maps each name, case-insensitively, to one
-// of these; siren, mlp, nerf and bacon are registered there, and code outside the library adds its
+// of these; siren, mlp, nerf, bacon and acorn are registered there, and code outside the library adds its
 // own with register_field_type. An unknown name is an UnknownNameError listing the valid
 // names.
 #pragma once

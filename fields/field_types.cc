@@ -6,6 +6,7 @@
 #include <span>
 #include <stdexcept>
 
+#include "fields/acorn.h"
 #include "fields/activation_layer.h"
 #include "fields/activations.h"
 #include "fields/bacon.h"
@@ -133,6 +134,7 @@ void register_field_types(FieldTypeRegistry& registry) {
   registry.add("mlp", std::make_unique<MlpType>());
   registry.add("nerf", std::make_unique<NerfType>());
   registry.add("bacon", make_bacon_type());
+  registry.add("acorn", make_acorn_type());
 }
 
 FieldTypeRegistry& field_types() {

@@ -13,9 +13,11 @@
 #include <optional>
 #include <nlohmann/json.hpp>
 
+#include "fields/acorn.h"
 #include "fields/encoding_type.h"
 #include "fields/field_config.h"
 #include "fields/field_io.h"
+#include "solvers/output/block_output.h"
 #include "solvers/output/unknowns_output.h"
 #include "fields/field_type.h"
 #include "io/atomic_write.h"
@@ -138,6 +140,7 @@ void resume_from(const std::filesystem::path& resume, RunSetup& setup, fields::F
                              std::to_string(field.network_parameter_count()));
   // The network's part; unknown constants (θ's tail) come back with the trainer's state.
   field.parameters().head(saved.parameter_count()) = saved.parameters();
+  fields::restore_block_tree(saved.options(), field.options());  // an acorn field's blocks
   trainer.load_state(file);
   if (auto* state = capability<KeepsState>(*setup.problem)) state->load_state(file);
   if (root) {
@@ -354,6 +357,7 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
           : GridMetrics{};
   std::vector<std::pair<std::string, double>> extra;
   setup.problem->write_outputs(context, extra);
+  write_block_outputs(field.options(), dir);  // an acorn field's blocks (blocks.vtp)
 
   nlohmann::ordered_json metrics =
       run_metrics(setup, trainer, field, finished, wall, grid, extra, first_step, communicator);

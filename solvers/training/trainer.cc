@@ -10,6 +10,7 @@
 
 #include "solvers/conditions/hard_constraints.h"
 #include "solvers/training/adaptive_refinement.h"
+#include "solvers/training/block_allocation.h"
 #include "solvers/training/causal_weighting.h"
 
 namespace nfield::solvers {
@@ -77,6 +78,8 @@ Trainer<Scalar>::Trainer(const Problem& problem, fields::Field<Scalar>& field,
   }
   losses_.assign(terms_.size(), 0.0);
   strategies_ = make_training_strategies<Scalar>(options_, problem_, names_);
+  // A field with a block tree (field.type: acorn) reallocates its blocks and samples them.
+  if (auto blocks = make_block_allocation(field_, options_.seed, terms_.size())) strategies_.push_back(std::move(blocks));
   if (options_.sampler != "uniform")
     for (size_t k = 0; k < terms_.size(); ++k)
       // Seeds apart from the engine's and from each other (UnitSequence mixes them further).

@@ -14,6 +14,10 @@
 //   adaptive   AdaptiveRefinement  (adaptive_refinement.h): an extra point set where ‖r‖ is
 //                                  largest, behind the residual term's drawn points (RAR)
 //
+// and one made from the field rather than `training:`, added last by the trainer for an acorn
+// field (make_block_allocation): BlockAllocation (block_allocation.h), ACORN's reallocation
+// of its blocks and per-block sampling.
+//
 // The loss a first-order step sees is then
 //     L = Σₖ wₖ λₖ / Nₖ Σₙ aₖₙ ‖rₖ(xₙ)‖²,
 // wₖ the term's fixed weight, λₖ the product of the strategies' loss_scale (1 by default), aₖₙ

@@ -163,7 +163,7 @@ std::vector<BadConfig> bad_configs() {
       {"BadProblem", edit("problem: poisson", "problem: poison"), "problem: |poison", "problem",
        {"expected one of ", "poisson", "wave", "; got 'poison'"}},
       {"BadFieldType", edit("type: siren", "type: sirenn"), "type: |sirenn", "field.type",
-       {"expected one of bacon, mlp, nerf, siren; got 'sirenn'"}},
+       {"expected one of acorn, bacon, mlp, nerf, siren; got 'sirenn'"}},
       {"BadActivation", edit("type: siren", "type: mlp\n  activation: swish"), "activation: |swish",
        "field.activation", {"expected one of ", "relu", "sine", "softplus", "tanh", "; got 'swish'"}},
       {"BadEncoding", edit("  hidden_omega: 1\n", "  hidden_omega: 1\n  encoding: {type: hash}\n"),
