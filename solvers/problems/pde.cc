@@ -73,7 +73,7 @@ namespace {
 
 const std::vector<std::string> kReservedNames = {
     "x", "y", "z", "t", "pi", "e", "lap", "bilap", "sin", "cos", "tan", "exp", "log", "sqrt",
-    "abs", "tanh", "sinh", "cosh", "atan", "min", "max", "pow"};
+    "abs", "tanh", "sinh", "cosh", "atan", "atan2", "min", "max", "pow"};
 
 bool is_name(const std::string& name, bool underscore) {
   if (name.empty() || !std::isalpha(static_cast<unsigned char>(name[0]))) return false;
