@@ -46,24 +46,8 @@
 // `type: residual` conditions) read it, as a slot whose current value is filled in at every
 // evaluation. `data:` adds the measurements' loss term. An unknown constant no residual reads
 // is a warning (the data alone cannot tell it); `true:` on a known constant is an error.
-// Unknown fields (issue 26 item 2):
-//   unknown_fields: {a: {true: "1/(1 + x^2 + y^2)"}}
-// declares a coefficient that varies over the domain and is learnt with u: an extra output
-// channel of the field, after `outputs`. Residuals read it with its derivatives exactly as
-// they read u (a, a_x, a_xy, lap(a): the same streams, the same Jet adjoint), so Adam,
-// L-BFGS and both LM backends train it through the field's own parameters and Jacobian, and
-// checkpoints carry it with no special case; conditions may give its known values by name
-// (`{on: boundary, type: dirichlet, value: {a: "…"}}`); the grid outputs write it beside u
-// and, with `true:`, its exact_/error_ arrays and rel_l2_a, max_abs_err_a in metrics.json.
-// Why an extra output and not a second small network of its own (`hidden:`, refused): the
-// output shares the field's hidden layers, so every pass, optimizer, the LM Jacobian, MPI
-// and checkpoints already handle it; a second network would need a second parameter block
-// through all of them. The cost: a and u share features, and the widths are u's. `true:`
-// needs reference.exact (or solution) for the outputs; with one given, every unknown field
-// needs its truth (the grid compares every output). Measurements (`data:`) default to the
-// outputs, not the unknown fields. A field no residual reads is a warning, as a constant.
-// `positive: true` is refused for fields (for constants it is a log parametrisation; a field
-// would need the chain rule through every derivative symbol): not done.
+// Unknown fields (`unknown_fields: {a: {true: EXPR}}`, solvers/problems/pde_unknown_fields.h)
+// are extra outputs of the field after `outputs`, read by residuals as the outputs are.
 // Limits: a residual reads at most 32 symbols; hard conditions (enforce: hard) take no
 // residual of order above 2.
 #include <algorithm>
@@ -84,6 +68,7 @@
 #include "solvers/problems/pde_reference.h"
 #include "solvers/problems/pde_residual.h"
 #include "solvers/problems/pde_streams.h"
+#include "solvers/problems/pde_unknown_fields.h"
 #include "solvers/problems/problems.h"
 
 namespace nfield::solvers {
@@ -126,7 +111,10 @@ class Pde final : public Problem {
     const io::ConfigNode& root = context.root;
     read_outputs(root);
     own_outputs_ = outputs_.size();
-    if (root.has("unknown_fields")) read_unknown_fields(root.child("unknown_fields"));
+    if (root.has("unknown_fields")) {
+      fields_ = PdeUnknownFields(root.child("unknown_fields"), outputs_, kReservedNames);
+      outputs_.insert(outputs_.end(), fields_.names().begin(), fields_.names().end());
+    }
     read_constants(root);
     const io::ConfigNode equation = root.child("equation");
     const io::ConfigNode list = equation.child("residuals");
@@ -138,19 +126,13 @@ class Pde final : public Problem {
     check_terms();
     if (root.has("derived")) read_derived(root.child("derived"));
     if (root.has("reference")) read_reference(root.child("reference"), context.config_dir);
-    if (!field_nodes_.empty()) read_field_truths(root);
+    fields_.read_truths(reference_, value_expressions(), own_outputs());
     if (root.has("data")) read_data(root.child("data"), context.config_dir);
     for (const auto& [name, value] : constants_)
       if (!contains(constants_used_, name))
         throw root.child("constants").error(name, "constant '" + name + "' is never used (by a residual, "
                                                   "a condition, derived, reference.exact or another constant)");
-    if (ansatz_ && !field_nodes_.empty())
-      throw root.child("unknown_fields").error("unknown fields take soft conditions only (enforce: soft)");
-    for (std::size_t f = 0; f < field_nodes_.size(); ++f)
-      if (!fields_read_[f])
-        std::fprintf(stderr, "%s\n", root.child("unknown_fields").child(outputs_[own_outputs_ + f]).error(
-            "warning: unknown field '" + outputs_[own_outputs_ + f] + "' is read by no residual: nothing ties "
-            "it to the equation").what());
+    fields_.check(ansatz_ != nullptr);
     if (unknowns_) {
       if (ansatz_)
         throw root.child("constants").error("unknown constants take soft conditions only (enforce: soft)");
@@ -206,15 +188,7 @@ class Pde final : public Problem {
   bool has_exact() const override { return reference_.has_exact(); }
   // The outputs' reference, then the unknown fields' truths.
   Eigen::MatrixXd exact(const Eigen::MatrixXd& x) const override {
-    if (field_truths_.empty()) return reference_.exact(x);
-    const Eigen::MatrixXd own = reference_.exact(x);
-    Eigen::MatrixXd all(x.rows(), own.cols() + static_cast<Eigen::Index>(field_truths_.size()));
-    all.leftCols(own.cols()) = own;
-    std::vector<double> scratch;
-    for (std::size_t f = 0; f < field_truths_.size(); ++f)
-      field_truths_[f].evaluate<double>(x.rows(), x.data(), x.rows(),
-                                        all.col(own.cols() + static_cast<Eigen::Index>(f)).data(), scratch);
-    return all;
+    return fields_.with_truths(x, reference_.exact(x));
   }
 
   // reference.file: the error at its points, after every stage and in metrics.json.
@@ -258,53 +232,9 @@ class Pde final : public Problem {
     }
   }
 
-  // `unknown_fields: {a: {true: EXPR}}`: extra outputs after `outputs` (see the header).
-  void read_unknown_fields(const io::ConfigNode& node) {
-    node.require(node.is_map() && node.size() > 0,
-                 "expected a mapping of field names to {true: EXPR} (or {} for no truth)");
-    for (const std::string& name : node.keys()) {
-      node.require(name, is_name(name, false),
-                   "unknown field name '" + name + "' must be letters and digits, starting with a letter");
-      node.require(name, !contains(kReservedNames, name),
-                   "unknown field name '" + name + "' is taken (reserved: " + io::join(kReservedNames) + ")");
-      node.require(name, !contains(outputs_, name), "'" + name + "' is an output already (outputs: " +
-                                                        io::join(std::vector<std::string>(
-                                                            outputs_.begin(), outputs_.begin() + own_outputs_)) + ")");
-      const io::ConfigNode field = node.child(name);
-      field.require(field.is_map() || field.is_null(), "expected a mapping {true: EXPR} (or {})");
-      if (field.is_map()) {
-        if (field.has("hidden"))
-          throw field.error("hidden", "an unknown field is an extra output of the field (its hidden layers); a "
-                                      "second network of its own is not implemented: remove 'hidden'");
-        if (field.has("positive"))
-          throw field.error("positive", "positive is not implemented for unknown fields (it is for unknown "
-                                        "constants); write the residual in terms of a field that may take any sign");
-        (void)field.has("true");  // read once the constants and the reference are known
-        field.reject_unknown_keys();
-      }
-      outputs_.push_back(name);
-      field_nodes_.push_back(field);
-      fields_read_.push_back(false);
-    }
-  }
-
-  // The unknown fields' `true:` expressions, beside reference.exact (or solution).
-  void read_field_truths(const io::ConfigNode& root) {
-    std::size_t given = 0;
-    for (const io::ConfigNode& field : field_nodes_) given += field.is_map() && field.has("true") ? 1 : 0;
-    if (given == 0) return;
-    for (std::size_t f = 0; f < field_nodes_.size(); ++f) {
-      const io::ConfigNode& field = field_nodes_[f];
-      const std::string& name = outputs_[own_outputs_ + f];
-      if (!field.is_map() || !field.has("true"))
-        throw root.child("unknown_fields").error(name, "give every unknown field its truth (true: EXPR) or none: "
-                                                       "the grid's errors compare every output");
-      if (!reference_.has_exact())
-        throw field.error("true", "a truth needs reference.exact (or reference.solution) for the outputs (" +
-                                      io::join(std::vector<std::string>(outputs_.begin(),
-                                                                        outputs_.begin() + own_outputs_)) + ")");
-      field_truths_.push_back(value_expressions().compile(field, "true"));
-    }
+  // The outputs, without the unknown fields.
+  std::vector<std::string> own_outputs() const {
+    return std::vector<std::string>(outputs_.begin(), outputs_.begin() + static_cast<long>(own_outputs_));
   }
 
   // `constants`: name → number or expression of earlier constants.
@@ -496,8 +426,7 @@ class Pde final : public Problem {
 
   // `data`: measurements (solvers/problems/pde_data.h).
   void read_data(const io::ConfigNode& node, const std::filesystem::path& config_dir) {
-    const std::vector<std::string> own(outputs_.begin(), outputs_.begin() + own_outputs_);
-    data_ = PdeData(node, domain_, own, value_expressions(), &reference_, config_dir);
+    data_ = PdeData(node, domain_, own_outputs(), value_expressions(), &reference_, config_dir);
   }
 
   std::string constant_names() const {
@@ -577,7 +506,7 @@ class Pde final : public Problem {
         slot[static_cast<std::size_t>(use.slot)] = d + static_cast<int>(symbols.size());
         symbols.push_back(candidates[static_cast<std::size_t>(use.slot - d)]);
         const auto output = static_cast<std::size_t>(symbols.back().output);
-        if (output >= own_outputs_) fields_read_[output - own_outputs_] = true;
+        if (output >= own_outputs_) fields_.note_read(output - own_outputs_);
       }
     for (const io::SymbolUse& use : expression.symbols())
       if (use.slot >= d + kUnknownSlots) {
@@ -652,9 +581,7 @@ class Pde final : public Problem {
   Domain domain_;
   std::vector<std::string> outputs_;  // the outputs, then the unknown fields
   std::size_t own_outputs_ = 0;       // of which the outputs
-  std::vector<io::ConfigNode> field_nodes_;
-  std::vector<char> fields_read_;  // by a residual
-  std::vector<io::CompiledExpression> field_truths_;
+  PdeUnknownFields fields_;
   std::vector<std::pair<std::string, double>> constants_;
   std::vector<std::string> constants_used_;
   std::vector<ResidualSpec> residuals_;
