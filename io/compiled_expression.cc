@@ -22,7 +22,7 @@ constexpr Function kFunctions[] = {
     {"sin", Op::kSin, 1},   {"cos", Op::kCos, 1},   {"tan", Op::kTan, 1},   {"exp", Op::kExp, 1},
     {"log", Op::kLog, 1},   {"sqrt", Op::kSqrt, 1}, {"abs", Op::kAbs, 1},   {"tanh", Op::kTanh, 1},
     {"sinh", Op::kSinh, 1}, {"cosh", Op::kCosh, 1}, {"atan", Op::kAtan, 1}, {"min", Op::kMin, 2},
-    {"max", Op::kMax, 2},   {"pow", Op::kPow, 2},
+    {"max", Op::kMax, 2},   {"pow", Op::kPow, 2},   {"atan2", Op::kAtan2, 2},
 };
 
 const Function* find_function(std::string_view name) {

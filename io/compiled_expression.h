@@ -13,7 +13,8 @@
 //   operators    + − * / ^ and unary ±, with the usual precedence; ^ binds tighter than
 //                unary minus and to the right: −x^2 = −(x²), 2^3^2 = 2⁹ = 512
 //   functions    sin cos tan exp log sqrt abs tanh sinh cosh atan (one argument),
-//                min max pow (two)
+//                min max pow atan2 (two; atan2(y, x) is the angle of (x, y) in (−π, π],
+//                with derivatives (x, −y)/(x² + y²) in Jet: infinite at the origin)
 //
 // The tape. Parsing builds a tree, which is compiled bottom-up into SSA instructions
 // (instruction k writes register k and reads earlier registers): a subtree that reads no
@@ -90,7 +91,7 @@ class CompiledExpression {
  public:
   enum class Op : std::uint8_t {
     kConst, kSlot, kNeg, kAdd, kSub, kMul, kDiv, kPowInt, kPowConst, kPow, kMin, kMax,
-    kSin, kCos, kTan, kExp, kLog, kSqrt, kAbs, kTanh, kSinh, kCosh, kAtan,
+    kSin, kCos, kTan, kExp, kLog, kSqrt, kAbs, kTanh, kSinh, kCosh, kAtan, kAtan2,
   };
   struct Instruction {
     Op op = Op::kConst;
@@ -173,7 +174,7 @@ T power_integer(const T& x, int k) {
 
 template <typename T>
 T CompiledExpression::apply(const Instruction& in, const T& a, const T& b) {
-  using std::abs, std::atan, std::cos, std::cosh, std::exp, std::log, std::pow, std::sin,
+  using std::abs, std::atan, std::atan2, std::cos, std::cosh, std::exp, std::log, std::pow, std::sin,
       std::sinh, std::sqrt, std::tan, std::tanh;
   switch (in.op) {
     case Op::kConst: return T(in.value);
@@ -201,6 +202,7 @@ T CompiledExpression::apply(const Instruction& in, const T& a, const T& b) {
     case Op::kSinh: return sinh(a);
     case Op::kCosh: return cosh(a);
     case Op::kAtan: return atan(a);
+    case Op::kAtan2: return atan2(a, b);
   }
   return a;
 }

@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <map>
+#include <optional>
 #include <stdexcept>
 
 #include "io/text.h"
@@ -195,11 +196,23 @@ Selection read_selection(const io::ConfigNode& node, const Geometry& geometry) {
     }
   }
   const std::string where = node.get_or("where", std::string());
+  node.require("where", !node.has("where") || where.find_first_not_of(" \t") != std::string::npos,
+               "expected an expression of the coordinates (leave 'where' out for the whole part)");
+  std::optional<Selection> selection;
   try {
-    return geometry.select(names, where);
+    selection = geometry.select(names, where);
   } catch (const io::ExpressionError& e) {
     throw node.expression_error("where", e);
   }
+  if (!where.empty()) {  // one point drawn: a `where` that keeps none of the parts is refused here
+    Random rng(1);
+    try {
+      (void)geometry.sample_boundary(rng, 1, *selection);
+    } catch (const std::runtime_error& e) {
+      throw node.error("where", e.what());
+    }
+  }
+  return *selection;
 }
 
 }  // namespace nfield::solvers::geometry

@@ -46,6 +46,8 @@
 // `type: residual` conditions) read it, as a slot whose current value is filled in at every
 // evaluation. `data:` adds the measurements' loss term. An unknown constant no residual reads
 // is a warning (the data alone cannot tell it); `true:` on a known constant is an error.
+// Unknown fields (`unknown_fields: {a: {true: EXPR}}`, solvers/problems/pde_unknown_fields.h)
+// are extra outputs of the field after `outputs`, read by residuals as the outputs are.
 // Limits: a residual reads at most 32 symbols; hard conditions (enforce: hard) take no
 // residual of order above 2.
 #include <algorithm>
@@ -66,6 +68,7 @@
 #include "solvers/problems/pde_reference.h"
 #include "solvers/problems/pde_residual.h"
 #include "solvers/problems/pde_streams.h"
+#include "solvers/problems/pde_unknown_fields.h"
 #include "solvers/problems/problems.h"
 
 namespace nfield::solvers {
@@ -73,7 +76,7 @@ namespace {
 
 const std::vector<std::string> kReservedNames = {
     "x", "y", "z", "t", "pi", "e", "lap", "bilap", "sin", "cos", "tan", "exp", "log", "sqrt",
-    "abs", "tanh", "sinh", "cosh", "atan", "min", "max", "pow"};
+    "abs", "tanh", "sinh", "cosh", "atan", "atan2", "min", "max", "pow"};
 
 bool is_name(const std::string& name, bool underscore) {
   if (name.empty() || !std::isalpha(static_cast<unsigned char>(name[0]))) return false;
@@ -107,6 +110,11 @@ class Pde final : public Problem {
       : domain_(Domain::from_config(context.root.child("domain"), context.config_dir)) {
     const io::ConfigNode& root = context.root;
     read_outputs(root);
+    own_outputs_ = outputs_.size();
+    if (root.has("unknown_fields")) {
+      fields_ = PdeUnknownFields(root.child("unknown_fields"), outputs_, kReservedNames);
+      outputs_.insert(outputs_.end(), fields_.names().begin(), fields_.names().end());
+    }
     read_constants(root);
     const io::ConfigNode equation = root.child("equation");
     const io::ConfigNode list = equation.child("residuals");
@@ -118,11 +126,13 @@ class Pde final : public Problem {
     check_terms();
     if (root.has("derived")) read_derived(root.child("derived"));
     if (root.has("reference")) read_reference(root.child("reference"), context.config_dir);
+    fields_.read_truths(reference_, value_expressions(), own_outputs());
     if (root.has("data")) read_data(root.child("data"), context.config_dir);
     for (const auto& [name, value] : constants_)
       if (!contains(constants_used_, name))
         throw root.child("constants").error(name, "constant '" + name + "' is never used (by a residual, "
                                                   "a condition, derived, reference.exact or another constant)");
+    fields_.check(ansatz_ != nullptr);
     if (unknowns_) {
       if (ansatz_)
         throw root.child("constants").error("unknown constants take soft conditions only (enforce: soft)");
@@ -176,7 +186,10 @@ class Pde final : public Problem {
 
   std::shared_ptr<const Ansatz> ansatz() const override { return ansatz_; }
   bool has_exact() const override { return reference_.has_exact(); }
-  Eigen::MatrixXd exact(const Eigen::MatrixXd& x) const override { return reference_.exact(x); }
+  // The outputs' reference, then the unknown fields' truths.
+  Eigen::MatrixXd exact(const Eigen::MatrixXd& x) const override {
+    return fields_.with_truths(x, reference_.exact(x));
+  }
 
   // reference.file: the error at its points, after every stage and in metrics.json.
   std::optional<double> reported_error(const OutputContext& context) const override {
@@ -217,6 +230,11 @@ class Pde final : public Problem {
       root.require("outputs", std::count(outputs_.begin(), outputs_.end(), name) == 1,
                    "output name '" + name + "' is listed twice");
     }
+  }
+
+  // The outputs, without the unknown fields.
+  std::vector<std::string> own_outputs() const {
+    return std::vector<std::string>(outputs_.begin(), outputs_.begin() + static_cast<long>(own_outputs_));
   }
 
   // `constants`: name → number or expression of earlier constants.
@@ -403,12 +421,12 @@ class Pde final : public Problem {
   }
 
   void read_reference(const io::ConfigNode& node, const std::filesystem::path& config_dir) {
-    reference_ = PdeReference(node, domain_, compared_names(), value_expressions(), config_dir, outputs_.size());
+    reference_ = PdeReference(node, domain_, compared_names(), value_expressions(), config_dir, own_outputs_);
   }
 
   // `data`: measurements (solvers/problems/pde_data.h).
   void read_data(const io::ConfigNode& node, const std::filesystem::path& config_dir) {
-    data_ = PdeData(node, domain_, outputs_, value_expressions(), &reference_, config_dir);
+    data_ = PdeData(node, domain_, own_outputs(), value_expressions(), &reference_, config_dir);
   }
 
   std::string constant_names() const {
@@ -487,6 +505,8 @@ class Pde final : public Problem {
       if (use.slot >= d && use.slot < d + kUnknownSlots) {
         slot[static_cast<std::size_t>(use.slot)] = d + static_cast<int>(symbols.size());
         symbols.push_back(candidates[static_cast<std::size_t>(use.slot - d)]);
+        const auto output = static_cast<std::size_t>(symbols.back().output);
+        if (output >= own_outputs_) fields_.note_read(output - own_outputs_);
       }
     for (const io::SymbolUse& use : expression.symbols())
       if (use.slot >= d + kUnknownSlots) {
@@ -559,7 +579,9 @@ class Pde final : public Problem {
   }
 
   Domain domain_;
-  std::vector<std::string> outputs_;
+  std::vector<std::string> outputs_;  // the outputs, then the unknown fields
+  std::size_t own_outputs_ = 0;       // of which the outputs
+  PdeUnknownFields fields_;
   std::vector<std::pair<std::string, double>> constants_;
   std::vector<std::string> constants_used_;
   std::vector<ResidualSpec> residuals_;

@@ -68,22 +68,32 @@ PdeData::PdeData(const io::ConfigNode& node, const Domain& domain, const std::ve
 
 void PdeData::read_exact(const io::ConfigNode& exact, const Domain& domain, const std::vector<std::string>& outputs,
                          const PdeExpressions& expressions, const PdeReference* reference) {
-  exact.require(exact.is_map(), "expected a mapping: an expression per measured output, points, noise, seed");
-  const long n = exact.get_or("points", 1000L);
-  exact.require("points", n >= 1 && n <= 10000000, "expected a number of points in [1, 1e7]");
+  exact.require(exact.is_map(), "expected a mapping: an expression per measured output, points or grid, noise "
+                                "or noise_std, seed");
+  if (exact.has("points") && exact.has("grid")) throw exact.error("grid", "give points or grid, not both");
+  if (exact.has("noise") && exact.has("noise_std")) throw exact.error("noise_std", "give noise or noise_std, not both");
   const double noise = exact.get_or("noise", 0.0);
   exact.require("noise", std::isfinite(noise) && noise >= 0, "expected a relative noise level >= 0");
+  const double noise_std = exact.get_or("noise_std", 0.0);
+  exact.require("noise_std", std::isfinite(noise_std) && noise_std >= 0, "expected a noise standard deviation >= 0");
   const long seed = exact.get_or("seed", 1L);
   exact.require("seed", seed >= 0, "expected a seed >= 0");
   Random rng(static_cast<Random::result_type>(seed));
-  points_ = domain.sample_interior(rng, n);
+  if (exact.has("grid")) {
+    points_ = grid_points(exact, domain);
+  } else {
+    const long count = exact.get_or("points", 1000L);
+    exact.require("points", count >= 1 && count <= 10000000, "expected a number of points in [1, 1e7]");
+    points_ = domain.sample_interior(rng, count);
+  }
+  const Eigen::Index n = points_.rows();
   std::vector<Eigen::VectorXd> columns;
   for (const std::string& key : exact.keys()) {
-    if (key == "points" || key == "noise" || key == "seed") continue;
+    if (key == "points" || key == "grid" || key == "noise" || key == "noise_std" || key == "seed") continue;
     const int c = index_of(outputs, key);
     if (c < 0)
       throw exact.error(key, "'" + key + "' is no output (outputs: " + io::join(outputs) +
-                                 "; and points, noise, seed)");
+                                 "; and points, grid, noise, noise_std, seed)");
     measured_.push_back(c);
     if (io::to_lower(exact.get<std::string>(key)) == "reference") {
       if (!reference || !reference->has_exact())
@@ -101,6 +111,36 @@ void PdeData::read_exact(const io::ConfigNode& exact, const Domain& domain, cons
   Eigen::MatrixXd clean(n, static_cast<Eigen::Index>(columns.size()));
   for (std::size_t j = 0; j < columns.size(); ++j) clean.col(static_cast<Eigen::Index>(j)) = columns[j];
   values_ = noise > 0 ? add_noise(clean, noise, rng) : clean;
+  if (noise_std > 0)
+    for (Eigen::Index c = 0; c < values_.cols(); ++c)
+      for (Eigen::Index i = 0; i < n; ++i) values_(i, c) += noise_std * normal(rng);
+}
+
+// `grid: [n₁, …]`: a regular grid of a box domain, n per input (space, then time), ends
+// included (n ≥ 2), first input fastest.
+Eigen::MatrixXd PdeData::grid_points(const io::ConfigNode& exact, const Domain& domain) {
+  if (domain.geometry()) throw exact.error("grid", "a grid of measurements needs a box domain (no geometry)");
+  const int d = domain.input_dim();
+  const std::vector<int> sizes = exact.get<std::vector<int>>("grid");
+  exact.require("grid", static_cast<int>(sizes.size()) == d,
+                "expected " + std::to_string(d) + " sizes (one per input: the space variables, then time)");
+  Eigen::Index total = 1;
+  for (const int k : sizes) {
+    exact.require("grid", k >= 2 && k <= 100000, "expected sizes in [2, 1e5] (the ends are included)");
+    total *= k;
+  }
+  exact.require("grid", total <= 10000000, "expected at most 1e7 points");
+  const Eigen::VectorXd lo = domain.input_lower(), hi = domain.input_upper();
+  Eigen::MatrixXd points(total, d);
+  for (Eigen::Index i = 0; i < total; ++i) {
+    Eigen::Index rest = i;
+    for (int a = 0; a < d; ++a) {
+      const int k = sizes[static_cast<std::size_t>(a)];
+      points(i, a) = lo(a) + (hi(a) - lo(a)) * static_cast<double>(rest % k) / (k - 1);
+      rest /= k;
+    }
+  }
+  return points;
 }
 
 Eigen::MatrixXd PdeData::add_noise(const Eigen::MatrixXd& clean, double noise, Random& rng) {

@@ -18,9 +18,12 @@
 //     exact:                        # synthetic measurements, for studies and tests
 //       u: "sin(pi*x)*exp(-t)"      # an expression per measured output, or `reference`:
 //                                   # the reference's exact or named solution (burgers_sine)
-//       points: 2000                # uniform random points of the domain (space × time)
+//       points: 2000                # uniform random points of the domain (space × time), or
+//       grid: [50, 50]              # a regular grid of a box domain, ends included, one size
+//                                   # per input (space, then time; PINNacle's 50 × 50 data)
 //       noise: 0.01                 # relative Gaussian noise: u + noise·std(u)·N(0, 1), std
-//                                   # over the points per output (Raissi et al. 2019's rule)
+//                                   # over the points per output (Raissi et al. 2019's rule), or
+//       noise_std: 0.1              # absolute Gaussian noise: u + 0.1·N(0, 1) (PINNacle's PInv)
 //       seed: 1                     # of the points and the noise (Box–Muller on the engine's
 //                                   # own uniforms, so the same on every platform)
 //
@@ -60,6 +63,8 @@ class PdeData {
   // N points of the domain and each output's values there with relative Gaussian noise
   // (see the header), one output per column of `clean`.
   static Eigen::MatrixXd add_noise(const Eigen::MatrixXd& clean, double noise, Random& rng);
+  // `grid:` of data.exact: the points of a regular grid of a box domain (see the header).
+  static Eigen::MatrixXd grid_points(const io::ConfigNode& exact, const Domain& domain);
 
  private:
   void read_exact(const io::ConfigNode& exact, const Domain& domain, const std::vector<std::string>& outputs,

@@ -226,6 +226,15 @@ std::vector<BadConfig> bad_configs() {
        {"missing.csv: no such file"}},
       {"PdeDataUnknownOutput", pde(base) + "data: {exact: {w: \"0\"}}\n", "{w: |\"0\"}", "data.exact.w",
        {"'w' is no output (outputs: u"}},
+      {"PdeDataGridSizes", pde(base) + "data: {exact: {u: \"0\", grid: [5]}}\n", "grid: |[5]", "data.exact.grid",
+       {"expected 2 sizes (one per input"}},
+      {"PdeDataTwoNoises", pde(base) + "data: {exact: {u: \"0\", noise: 0.1, noise_std: 0.1}}\n", "noise_std: |0.1",
+       "data.exact.noise_std", {"give noise or noise_std, not both"}},
+      // problem: pde, unknown fields.
+      {"PdeUnknownFieldHidden", pde(base) + "unknown_fields:\n  a: {hidden: [8]}\n", "hidden: |[8]",
+       "unknown_fields.a.hidden", {"a second network of its own is not implemented"}},
+      {"PdeUnknownFieldTruthWithoutReference", pde(base) + "unknown_fields:\n  a: {true: \"x\"}\n", "true: |\"x\"",
+       "unknown_fields.a.true", {"a truth needs reference.exact"}},
       // YAML itself.
       {"YamlSyntax", edit("lower: [0, 0]", "lower: [0, 0"), "  upper|: [1, 1]", "",
        {"YAML syntax error"}},

@@ -9,6 +9,7 @@
 #include <ceres/jet.h>
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -40,7 +41,7 @@ struct Case {
   Case { text, [](double x, double y) { (void)x; (void)y; return expr; }, [](float x, float y) { (void)x; (void)y; return expr; } }
 
 const std::vector<Case>& cases() {
-  using std::abs, std::atan, std::cos, std::cosh, std::exp, std::log, std::pow, std::sin, std::sinh,
+  using std::abs, std::atan, std::atan2, std::cos, std::cosh, std::exp, std::log, std::pow, std::sin, std::sinh,
       std::sqrt, std::tan, std::tanh;
   static const std::vector<Case> all = {
       CASE("x + y", x + y),         CASE("x - y", x - y),           CASE("x * y", x * y),
@@ -54,7 +55,7 @@ const std::vector<Case>& cases() {
       CASE("max(x, y)", x < y ? y : x),                             CASE("pow(x, y)", pow(x, y)),
       CASE("pow(y, 2)", y * y),     CASE("x - y - 1", x - y - 1),   CASE("x / y / 2", x / y / 2),
       CASE("-x^2", -(x * x)),       CASE("2*-x", 2 * -x),           CASE("(x + y) * 2", (x + y) * 2),
-      CASE("x*y + y*x", x * y + y * x),
+      CASE("x*y + y*x", x * y + y * x),  CASE("atan2(y, x)", atan2(y, x)), CASE("atan2(-y, -x)", atan2(-y, -x)),
   };
   return all;
 }
@@ -204,6 +205,40 @@ TEST(CompiledExpression, JetDerivativesMatchCentralDifferences) {
       EXPECT_NEAR(value.v[i], difference, 1e-6 * std::max(1.0, std::abs(difference))) << "d/d slot " << i;
     }
   }
+}
+
+// atan2(y, x) in every quadrant, across the branch cut at x < 0 from either side, and its
+// Jet derivatives (−y, x)/(x² + y²) against central differences.
+TEST(CompiledExpression, Atan2ValueAndDerivatives) {
+  using Jet = ceres::Jet<double, 2>;
+  const CompiledExpression e("atan2(y, x)", xyz_scope());
+  std::vector<double> scratch;
+  std::vector<Jet> jet_scratch;
+  const double points[][2] = {{1, 0.5}, {-1, 0.5}, {-1, -0.5}, {0.3, -2}, {-1, 1e-12}, {-1, -1e-12}, {0, 1}};
+  for (const auto& p : points) {
+    SCOPED_TRACE(std::to_string(p[0]) + ", " + std::to_string(p[1]));
+    double row[3] = {p[0], p[1], 0};
+    EXPECT_EQ(e.evaluate<double>(row, scratch), std::atan2(p[1], p[0]));
+    Jet jets[3] = {Jet(p[0], 0), Jet(p[1], 1), Jet(0.0)};
+    const Jet value = e.evaluate<Jet>(jets, jet_scratch);
+    EXPECT_EQ(value.a, std::atan2(p[1], p[0]));
+    const double r2 = p[0] * p[0] + p[1] * p[1];
+    EXPECT_NEAR(value.v[0], -p[1] / r2, 1e-15);
+    EXPECT_NEAR(value.v[1], p[0] / r2, 1e-15);
+    if (p[0] < 0 && std::abs(p[1]) < 1e-6) continue;  // central differences straddle the cut
+    for (int i = 0; i < 2; ++i) {
+      const double h = 1e-6, saved = row[i];
+      row[i] = saved + h;
+      const double up = e.evaluate<double>(row, scratch);
+      row[i] = saved - h;
+      const double down = e.evaluate<double>(row, scratch);
+      row[i] = saved;
+      EXPECT_NEAR(value.v[i], (up - down) / (2 * h), 1e-8) << "d/d slot " << i;
+    }
+  }
+  // The cut: just above it the angle is near π, just below near −π.
+  EXPECT_NEAR(e.evaluate<double>(std::array<double, 3>{-1, 1e-12, 0}.data(), scratch), std::numbers::pi, 1e-11);
+  EXPECT_NEAR(e.evaluate<double>(std::array<double, 3>{-1, -1e-12, 0}.data(), scratch), -std::numbers::pi, 1e-11);
 }
 
 // The error's position and a part of its message.
