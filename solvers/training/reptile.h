@@ -42,9 +42,11 @@
 // point on that family is the median instead. Adam remains a choice because an SGD inner
 // rate that suits one layer of a SIREN can be far off for another.
 //
-// Progress lines: outer step, the mean inner loss over the draws at the first inner step
-// (what θ gives before adaptation, "before") and at the last, the rate in outer steps per
-// second and the ETA. A loss that is not finite stops the run with an error naming the step.
+// Progress lines: outer step, `loss` the mean over the draws of the loss at the last inner
+// step (evaluated before its update: after K − 1 updates), `before` the mean loss at θ
+// itself (before adaptation), the rate in outer steps per second and the ETA. A loss or
+// gradient that is not finite stops the run with an error naming the outer step and the
+// instance.
 // The meta run's driver (outputs, checkpoint, held-out curves) is solvers/meta_run.h.
 #pragma once
 
@@ -78,8 +80,8 @@ struct ReptileCallbacks {
 struct ReptileResult {
   long steps = 0;                // outer steps taken
   bool finished = false;         // all of them (false: stopped)
-  double mean_first_loss = 0;    // of the last outer step: before adaptation
-  double mean_last_loss = 0;     // and at the last inner step
+  double mean_first_loss = 0;    // of the last outer step: at θ, before adaptation
+  double mean_last_loss = 0;     // and at the last inner step (before its update)
 };
 
 // Runs meta.steps outer steps over `tasks`, moving field.parameters() (the initialisation).
