@@ -6,7 +6,9 @@ initialisation and after 0, K and C steps from the standard one, and the standar
 step where it first matches the learned one's K-step figure; and beside it the mean held-out
 curve of both (held_out_curve.csv).
 
-    /usr/bin/python3 scripts/meta_figure.py out/meta_images docs/images/meta_images.png
+    /usr/bin/python3 scripts/meta_figure.py out/meta_images docs/images/meta_images.png data/images/family
+
+The third argument, optional, is the folder of the pictures themselves (the first column).
 
 K and C are the run's inner_steps and curve_steps (from its config.yaml). Reads only the run's
 own files; writes one PNG.
@@ -30,9 +32,6 @@ def main(run, out_png):
     metrics = json.load(open(os.path.join(run, 'metrics.json')))
     meta = config['training']['meta']
     k, c = meta['inner_steps'], meta['curve_steps']
-    family = config['equation']['family']
-    images = family['images']
-    folder = os.path.join(os.path.dirname(os.path.abspath(os.path.join(run, 'config.yaml'))), '..')
     held = metrics['held_out']
     columns = ['picture', f'learned, 0', f'learned, {k}', f'learned, {c}', 'standard, 0', f'standard, {k}',
                f'standard, {c}', 'standard, match']
@@ -68,11 +67,12 @@ def main(run, out_png):
     ax.plot(range(len(meta_curve)), meta_curve, 'o-', label=f'learned init ({meta["inner_optimizer"]})')
     ax.axhline(metrics[f'held_out_meta_step{k}'], color='grey', lw=0.8, ls='--')
     ax.set_xscale('symlog', linthresh=1)
+    ax.set_xlim(0, len(standard_curve))
     ax.set_xlabel('steps')
     ax.set_ylabel(f'held-out {metrics["held_out_figure"]} (mean)')
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(out_png, dpi=80)
+    fig.savefig(out_png, dpi=56)
 
 
 if __name__ == '__main__':

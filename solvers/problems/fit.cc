@@ -241,18 +241,6 @@ class Fit final : public Problem {
     for (Eigen::Index k = 0; k < shown; ++k) progress_samples_(k) = k * n / shown;
   }
 
-  static std::optional<std::pair<int, int>> read_crop(const io::ConfigNode& node) {
-    if (!node.has("crop")) return std::nullopt;
-    if (node.has_list("crop")) {
-      const std::vector<int> size = node.get_list<int>("crop", 2);
-      node.require("crop", size[0] >= 1 && size[1] >= 1 && size[0] <= 65536 && size[1] <= 65536,
-                   "expected [width, height], each in [1, 65536]");
-      return std::pair{size[0], size[1]};
-    }
-    const int size = node.get_in_range("crop", 1, 65536);
-    return std::pair{size, size};
-  }
-
   // equation.family: {images: FOLDER | [FILE, …], crop: n | [w, h], held_out: n | [FILE, …]}
   // (solvers/problems/image_family.h). The family problem stands for its first training picture.
   void read_family(const io::ConfigNode& equation, const fs::path& config_dir) {
@@ -308,7 +296,7 @@ class Fit final : public Problem {
   void read_pictures(const io::ConfigNode& equation, const fs::path& path) {
     const bool video = signal_.kind == Kind::kVideo;
     const std::string channels = equation.get_choice("channels", {"auto", "grey", "rgb"}, "auto");
-    const std::optional<std::pair<int, int>> crop = read_crop(equation);
+    const std::optional<std::pair<int, int>> crop = read_crop_size(equation);
     int frames = 0;
     if (video) {
       if (equation.has("frames")) frames = equation.get_in_range("frames", 1, 100000);

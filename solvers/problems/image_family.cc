@@ -33,18 +33,6 @@ std::vector<fs::path> family_files(const io::ConfigNode& family, const fs::path&
   return files;
 }
 
-std::optional<std::pair<int, int>> family_crop(const io::ConfigNode& family) {
-  if (!family.has("crop")) return std::nullopt;
-  if (family.has_list("crop")) {
-    const std::vector<int> size = family.get_list<int>("crop", 2);
-    family.require("crop", size[0] >= 1 && size[1] >= 1 && size[0] <= 65536 && size[1] <= 65536,
-                   "expected [width, height], each in [1, 65536]");
-    return std::pair{size[0], size[1]};
-  }
-  const int size = family.get_in_range("crop", 1, 65536);
-  return std::pair{size, size};
-}
-
 std::string size_text(int width, int height) { return std::to_string(width) + " x " + std::to_string(height); }
 
 // The order of the pictures: training ones first, in file order, then the held-out ones in
@@ -82,10 +70,22 @@ std::vector<std::size_t> held_out_last(const io::ConfigNode& family, const std::
 
 }  // namespace
 
+std::optional<std::pair<int, int>> read_crop_size(const io::ConfigNode& node) {
+  if (!node.has("crop")) return std::nullopt;
+  if (node.has_list("crop")) {
+    const std::vector<int> size = node.get_list<int>("crop", 2);
+    node.require("crop", size[0] >= 1 && size[1] >= 1 && size[0] <= 65536 && size[1] <= 65536,
+                 "expected [width, height], each in [1, 65536]");
+    return std::pair{size[0], size[1]};
+  }
+  const int size = node.get_in_range("crop", 1, 65536);
+  return std::pair{size, size};
+}
+
 ImageFamily read_image_family(const io::ConfigNode& family, const fs::path& config_dir, const std::string& channels) {
   family.require(family.is_map(), "expected a mapping {images: FOLDER or [FILE, ...], crop: 64, held_out: 4}");
   const std::vector<fs::path> files = family_files(family, config_dir);
-  const std::optional<std::pair<int, int>> crop = family_crop(family);
+  const std::optional<std::pair<int, int>> crop = read_crop_size(family);
   ImageFamily out;
   const std::vector<std::size_t> order = held_out_last(family, files, out.training);
   int first_width = 0, first_height = 0, chosen_channels = 0;

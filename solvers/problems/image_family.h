@@ -22,7 +22,9 @@
 
 #include <cstddef>
 #include <filesystem>
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "io/config.h"
@@ -35,6 +37,10 @@ struct ImageFamily {
   std::vector<std::string> names;  // their file names
   std::size_t training = 0;        // how many are for training
 };
+
+// The `crop` key of `node` (equation, or equation.family): n or [width, height], each in
+// [1, 65536]; nullopt when absent.
+std::optional<std::pair<int, int>> read_crop_size(const io::ConfigNode& node);
 
 // Reads `family` (the node of equation.family); paths relative to `config_dir`; `channels`
 // is auto, grey or rgb. Throws io::ConfigError located at the key at fault.
