@@ -29,6 +29,7 @@
 #include "solvers/problem_capabilities.h"
 #include "solvers/training/progress_printer.h"
 #include "solvers/training/trainer.h"
+#include "solvers/meta_run.h"
 
 namespace nfield::solvers {
 namespace {
@@ -303,6 +304,8 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
   const std::filesystem::path config_dir =
       std::filesystem::absolute(setup.data_dir).lexically_normal();
   fields::Field<Scalar> field(setup.field);
+  if (setup.init.parameters.size() > 0)  // field.init; --resume below replaces it
+    field.parameters().head(setup.init.parameters.size()) = setup.init.parameters.cast<Scalar>();
   // Under mpirun every rank trains (solvers/training/trainer.h); rank 0 alone prints and
   // writes the config, checkpoints, outputs and metrics.
   Communicator& communicator = world_communicator();
@@ -440,6 +443,7 @@ RunSetup setup_run(io::ConfigNode root, const std::filesystem::path& config,
   s.root.get_choice("problem", problem_names());
   s.problem = make_problem({s.root, s.data_dir});
   s.training = TrainingOptions::from_config(s.root.child_or_empty("training"));
+  (void)s.root.child_or_empty("field").has("init");  // read below, once the field's shape is known
   s.field = fields::field_options_from_config(s.root.child_or_empty("field"),
                                               s.problem->field_input_dim(),
                                               s.problem->output_dim(), s.training.seed,
@@ -469,6 +473,8 @@ RunSetup setup_run(io::ConfigNode root, const std::filesystem::path& config,
   const Eigen::VectorXd upper = s.problem->domain().input_upper();
   s.field.encoding.lower.assign(lower.data(), lower.data() + lower.size());
   s.field.encoding.upper.assign(upper.data(), upper.data() + upper.size());
+  s.init = read_field_init(s.root.child_or_empty("field"), s.field, s.data_dir);
+  check_meta(s);
   const auto stages = static_cast<int>(s.training.stages.size());
   if (s.field.encoding.from_stage > 0 && s.field.encoding.from_stage >= stages)
     throw s.root.child("field").child("encoding").error(
@@ -506,6 +512,7 @@ RunSetup setup_run(io::ConfigNode root, const std::filesystem::path& config,
   s.resolved = YAML::Clone(s.root.yaml());
   s.resolved["training"] = s.training.to_yaml();
   s.resolved["field"] = fields::to_yaml(s.field, s.problem->domain().input_names());
+  if (!s.init.text.empty()) s.resolved["field"]["init"] = s.init.text;
   s.resolved["output"] = output_yaml(s.output);
   return s;
 }
@@ -519,6 +526,7 @@ RunSetup load_run(const std::filesystem::path& config, const std::vector<std::st
 }
 
 int execute_run(RunSetup& setup, const std::filesystem::path& resume) {
+  if (setup.training.meta.enabled) return execute_meta_run(setup, resume);
   return setup.training.precision == "double" ? train_and_write<double>(setup, resume)
                                               : train_and_write<float>(setup, resume);
 }

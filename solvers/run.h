@@ -23,25 +23,9 @@
 
 #include "fields/field.h"
 #include "io/hdf5_file.h"
-#include "solvers/output/output_options.h"
-#include "solvers/problem.h"
-#include "solvers/training/training_options.h"
+#include "solvers/run_setup.h"
 
 namespace nfield::solvers {
-
-struct RunSetup {
-  std::filesystem::path config_path;
-  io::ConfigNode root;
-  std::unique_ptr<Problem> problem{};
-  fields::FieldOptions field{};
-  TrainingOptions training{};
-  OutputOptions output{};
-  YAML::Node resolved{};  // the config with defaults filled in
-  std::filesystem::path data_dir{};  // relative data paths resolve here (the config's folder)
-  // Progress lines redrawn in place or one per line (ProgressPrinterOptions::terminal); unset:
-  // redrawn on a terminal outside mpirun (nfield run --progress).
-  std::optional<bool> live_progress{};
-};
 
 // Reads and checks a config (and `--set` overrides). Throws io::ConfigError. Relative data
 // paths resolve against `data_dir` (default: the config's folder).

@@ -62,6 +62,7 @@
 #include "io/png_image.h"
 #include "io/text.h"
 #include "solvers/problem_capabilities.h"
+#include "solvers/problems/image_family.h"
 #include "solvers/problems/problems.h"
 
 namespace nfield::solvers {
@@ -93,22 +94,29 @@ class Fit final : public Problem, public ReportsProgress {
     const io::ConfigNode equation = context.root.child("equation");
     const std::string kind = equation.get_choice("signal", {"image", "audio", "video"});
     signal_.kind = kind == "audio" ? Kind::kAudio : kind == "video" ? Kind::kVideo : Kind::kImage;
-    const fs::path path = context.config_dir / equation.get<std::string>("path");
-    if (signal_.kind == Kind::kAudio)
-      read_audio(equation, path);
-    else
-      read_pictures(equation, path);
+    if (equation.has("family")) {
+      equation.require("family", signal_.kind == Kind::kImage, "expected signal: image (a family holds pictures)");
+      equation.require("family", !equation.has("path"), "a family names its pictures itself: drop equation.path");
+      read_family(equation, context.config_dir);
+    } else {
+      const fs::path path = context.config_dir / equation.get<std::string>("path");
+      if (signal_.kind == Kind::kAudio)
+        read_audio(equation, path);
+      else
+        read_pictures(equation, path);
+    }
     equation.reject_unknown_keys();
-    if (signal_.kind == Kind::kImage)
-      domain_ = Domain({-1.0, -1.0}, {1.0, 1.0});
-    else if (signal_.kind == Kind::kAudio)
-      domain_ = Domain({-time_scale_}, {time_scale_});
-    else
-      domain_ = Domain({-1.0, -1.0}, {1.0, 1.0}, std::pair{-time_scale_, time_scale_});
-    // Evenly spread samples for the progress line's figure.
-    const Eigen::Index n = signal_.size(), shown = std::min<Eigen::Index>(n, 65536);
-    progress_samples_.resize(shown);
-    for (Eigen::Index k = 0; k < shown; ++k) progress_samples_(k) = k * n / shown;
+    finish();
+  }
+
+  // One instance of a family: a problem of that one picture.
+  explicit Fit(Signal signal) : domain_({-1.0}, {1.0}), signal_(std::move(signal)) { finish(); }
+
+  std::vector<ProblemInstance> instances(bool held_out) const override {
+    std::vector<ProblemInstance> out;
+    const std::size_t first = held_out ? training_count_ : 0, end = held_out ? family_.size() : training_count_;
+    for (std::size_t k = first; k < end; ++k) out.push_back({family_names_[k], std::make_unique<Fit>(family_[k])});
+    return out;
   }
 
   const Domain& domain() const override { return domain_; }
@@ -221,6 +229,40 @@ class Fit final : public Problem, public ReportsProgress {
   }
 
  private:
+  void finish() {
+    if (signal_.kind == Kind::kImage)
+      domain_ = Domain({-1.0, -1.0}, {1.0, 1.0});
+    else if (signal_.kind == Kind::kAudio)
+      domain_ = Domain({-time_scale_}, {time_scale_});
+    else
+      domain_ = Domain({-1.0, -1.0}, {1.0, 1.0}, std::pair{-time_scale_, time_scale_});
+    // Evenly spread samples for the progress line's figure.
+    const Eigen::Index n = signal_.size(), shown = std::min<Eigen::Index>(n, 65536);
+    progress_samples_.resize(shown);
+    for (Eigen::Index k = 0; k < shown; ++k) progress_samples_(k) = k * n / shown;
+  }
+
+  // equation.family: {images: FOLDER | [FILE, …], crop: n | [w, h], held_out: n | [FILE, …]}
+  // (solvers/problems/image_family.h). The family problem stands for its first training picture.
+  void read_family(const io::ConfigNode& equation, const fs::path& config_dir) {
+    const std::string channels = equation.get_choice("channels", {"auto", "grey", "rgb"}, "auto");
+    const io::ConfigNode family = equation.child("family");
+    const ImageFamily pictures = read_image_family(family, config_dir, channels);
+    family.reject_unknown_keys();
+    for (std::size_t k = 0; k < pictures.images.size(); ++k) {
+      const io::Image& image = pictures.images[k];
+      Signal signal;
+      signal.width = image.width;
+      signal.height = image.height;
+      signal.channels = image.channels;
+      signal.values = image.pixels;
+      family_.push_back(std::move(signal));
+      family_names_.push_back(pictures.names[k]);
+    }
+    training_count_ = pictures.training;
+    signal_ = family_.front();
+  }
+
   void read_audio(const io::ConfigNode& equation, const fs::path& path) {
     io::AudioClip clip;
     try {
@@ -255,18 +297,7 @@ class Fit final : public Problem, public ReportsProgress {
   void read_pictures(const io::ConfigNode& equation, const fs::path& path) {
     const bool video = signal_.kind == Kind::kVideo;
     const std::string channels = equation.get_choice("channels", {"auto", "grey", "rgb"}, "auto");
-    std::optional<std::pair<int, int>> crop;
-    if (equation.has("crop")) {
-      if (equation.has_list("crop")) {
-        const std::vector<int> size = equation.get_list<int>("crop", 2);
-        equation.require("crop", size[0] >= 1 && size[1] >= 1 && size[0] <= 65536 && size[1] <= 65536,
-                         "expected [width, height], each in [1, 65536]");
-        crop = std::pair{size[0], size[1]};
-      } else {
-        const int size = equation.get_in_range("crop", 1, 65536);
-        crop = std::pair{size, size};
-      }
-    }
+    const std::optional<std::pair<int, int>> crop = read_crop_size(equation);
     int frames = 0;
     if (video) {
       if (equation.has("frames")) frames = equation.get_in_range("frames", 1, 100000);
@@ -430,6 +461,10 @@ class Fit final : public Problem, public ReportsProgress {
 
   Domain domain_;
   Signal signal_;
+  // A family (equation.family): every picture, the training ones first.
+  std::vector<Signal> family_;
+  std::vector<std::string> family_names_;
+  std::size_t training_count_ = 0;
   double time_scale_ = 1.0;
   Eigen::VectorXi progress_samples_;
 };

@@ -39,6 +39,7 @@ TrainingOptions TrainingOptions::from_config(const io::ConfigNode& node) {
   o.adaptive = adaptive_from_config(node);
   o.balance = balance_from_config(node);
   o.causal = causal_from_config(node);
+  o.meta = meta_from_config(node);
   if (node.has("stages")) {
     const io::ConfigNode stages = node.child("stages");
     stages.require(stages.is_sequence() && stages.size() > 0, "expected a non-empty list of stages");
@@ -79,6 +80,7 @@ YAML::Node TrainingOptions::to_yaml() const {
   }
   n["sampler"] = sampler;
   write_yaml(n, adaptive, balance, causal);
+  write_yaml(n, meta);
   return n;
 }
 

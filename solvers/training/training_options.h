@@ -17,6 +17,7 @@
 //     adaptive: {every: 500, candidates: 10000, add: 100, max_points: 2000}  # RAR; absent: off
 //     balance: fixed               # fixed | grad_norm | {method: grad_norm, every: 100, alpha: 0.1}
 //     causal: {epsilon: 1.0, slices: 32, every: 100}   # causal weights in time; absent: off
+//     meta: {algorithm: reptile, steps: 1000, inner_steps: 2, …}  # solvers/training/reptile.h
 //     stages:
 //       - {optimizer: adam, steps: 2000, lr: 1.0e-3, schedule: cosine, lr_final: 1.0e-5}
 //       - {optimizer: lbfgs, steps: 500, memory: 20, resample_every: 0}
@@ -42,6 +43,7 @@
 
 #include "io/config.h"
 #include "solvers/training/loss_balancing.h"
+#include "solvers/training/meta_options.h"
 #include "solvers/training/optimizer.h"
 
 namespace nfield::solvers {
@@ -83,6 +85,8 @@ struct TrainingOptions {
   AdaptiveOptions adaptive;
   BalanceOptions balance;
   CausalOptions causal;
+  // Meta-learning over a family of instances (solvers/training/reptile.h); off by default.
+  MetaOptions meta;
 
   int total_steps() const;
   static TrainingOptions from_config(const io::ConfigNode& node);
