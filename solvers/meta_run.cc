@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: MIT
 #include "solvers/meta_run.h"
+#include "solvers/problem_capabilities.h"
 
 #include <algorithm>
 #include <atomic>
@@ -78,7 +79,9 @@ class HeldOutEvaluation {
     const fs::path folder = dir_ / "held_out" / stem_of(instance.name);
     const int last = std::max(meta.curve_steps, meta.inner_steps);
     const auto record = [&](std::vector<double>& curve, const std::string& label, int step, bool snapshot) {
-      const auto figures = problem.progress_metrics(context(folder / (label + "_" + std::to_string(step))), 0);
+      const auto* reports = capability<ReportsProgress>(problem);
+      const auto figures = reports ? reports->progress_metrics(context(folder / (label + "_" + std::to_string(step))), {})
+                                   : std::vector<std::pair<std::string, double>>{};
       if (figures.empty()) throw std::runtime_error("held-out instance " + instance.name + " reports no figure");
       c.figure = figures.front().first;
       curve.push_back(figures.front().second);
@@ -205,8 +208,8 @@ int meta_train_and_write(RunSetup& setup) {
   const MetaOptions& meta = setup.training.meta;
   const fs::path dir = setup.output.dir;
   const std::string config_text = io::to_yaml(setup.resolved);
-  const std::vector<ProblemInstance> tasks = setup.problem->instances(false);
-  const std::vector<ProblemInstance> held_out = setup.problem->instances(true);
+  const std::vector<ProblemInstance> tasks = instances(*setup.problem, false);
+  const std::vector<ProblemInstance> held_out = instances(*setup.problem, true);
   fields::Field<Scalar> field(setup.field);
   if (setup.init.parameters.size() > 0)
     field.parameters().head(setup.init.parameters.size()) = setup.init.parameters.cast<Scalar>();
@@ -279,7 +282,7 @@ int meta_train_and_write(RunSetup& setup) {
 
 void check_meta(const RunSetup& s) {
   const io::ConfigNode training = s.root.child_or_empty("training");
-  const bool family = !s.problem->instances(false).empty();
+  const bool family = !instances(*s.problem, false).empty();
   if (!s.training.meta.enabled) {
     if (family)
       throw s.root.child("equation").error(

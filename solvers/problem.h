@@ -57,13 +57,6 @@ struct RenderRequest {
 class Ansatz;
 class Problem;
 
-// One instance of a family of problems (equation.family): its name (an image's file name)
-// and the problem of that one signal.
-struct ProblemInstance {
-  std::string name;
-  std::unique_ptr<Problem> problem;
-};
-
 class Problem {
  public:
   virtual ~Problem() = default;
@@ -104,16 +97,6 @@ class Problem {
   // Whether the field is written on the output grid over the domain (solution.vti and its
   // PNG, grid errors): false for fields whose inputs are not the domain's coordinates.
   virtual bool writes_grid_outputs() const { return true; }
-
-  // A family of instances (equation.family, trained by training.meta:
-  // solvers/training/reptile.h): the training ones, or the held-out ones, each a problem of
-  // its own signal that trains and writes its outputs as any problem. Empty: not a family.
-  // The family problem itself stands for its first training instance (domain, outputs,
-  // loss terms), so that the field and the batch are read as for one signal.
-  virtual std::vector<ProblemInstance> instances(bool held_out) const {
-    (void)held_out;
-    return {};
-  }
 
   // Extra metrics (added to metrics.json) and files after training.
   virtual void write_outputs(const OutputContext& context, std::vector<std::pair<std::string, double>>& metrics) const;

@@ -8,4 +8,9 @@ Eigen::Array<bool, Eigen::Dynamic, 1> error_mask(const Problem& problem, const E
   return Eigen::Array<bool, Eigen::Dynamic, 1>::Constant(x.rows(), true);
 }
 
+std::vector<ProblemInstance> instances(const Problem& problem, bool held_out) {
+  if (const auto* family = capability<HasInstances>(problem)) return family->instances(held_out);
+  return {};
+}
+
 }  // namespace nfield::solvers

@@ -14,6 +14,7 @@
 //   ReportsProgress       nerf, autoint_nerf,   the progress line, at most every 10 s
 //                         fit
 //   RendersViews          nerf, autoint_nerf    `nfield render`
+//   HasInstances          fit (a family)        `nfield run` with training.meta (meta_run.h)
 //
 // Sampling is a pure function of the trainer's random engine and the problem's state: a
 // problem whose points depend on the field in training (NeRF's occupancy grid and importance
@@ -21,6 +22,7 @@
 // trainer calls with the step count before it draws, never inside the (const) draw.
 #pragma once
 
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -111,5 +113,25 @@ class RendersViews {
   virtual ~RendersViews() = default;
   virtual void render_views(const OutputContext& context, const RenderRequest& request) const = 0;
 };
+
+// One instance of a family of problems (equation.family): its name (an image's file name)
+// and the problem of that one signal.
+struct ProblemInstance {
+  std::string name;
+  std::unique_ptr<Problem> problem;
+};
+
+// A family of instances (equation.family, trained by training.meta:
+// solvers/training/reptile.h): the training ones, or the held-out ones, each a problem of
+// its own signal that trains and writes its outputs as any problem. The family problem
+// itself stands for its first training instance (domain, outputs, loss terms), so that the
+// field and the batch are read as for one signal.
+class HasInstances {
+ public:
+  virtual ~HasInstances() = default;
+  virtual std::vector<ProblemInstance> instances(bool held_out) const = 0;
+};
+// The instances of a problem; empty when it is no family.
+std::vector<ProblemInstance> instances(const Problem& problem, bool held_out);
 
 }  // namespace nfield::solvers

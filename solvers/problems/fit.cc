@@ -88,7 +88,7 @@ double snr_db(const Eigen::MatrixXd& fitted, const Eigen::MatrixXd& target) {
   return 10.0 * std::log10(target.squaredNorm() / std::max((fitted - target).squaredNorm(), 1e-300));
 }
 
-class Fit final : public Problem, public ReportsProgress {
+class Fit final : public Problem, public ReportsProgress, public HasInstances {
  public:
   explicit Fit(const ProblemContext& context) : domain_({-1.0}, {1.0}) {
     const io::ConfigNode equation = context.root.child("equation");

@@ -58,6 +58,7 @@
 #include "fields/field.h"
 #include "solvers/training/meta_options.h"
 #include "solvers/problem.h"
+#include "solvers/problem_capabilities.h"
 
 namespace nfield::solvers {
 

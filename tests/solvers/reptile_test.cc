@@ -15,6 +15,7 @@
 
 #include "fields/field_io.h"
 #include "io/png_image.h"
+#include "solvers/problem_capabilities.h"
 #include "solvers/run.h"
 #include "solvers/training/reptile.h"
 #include "tests/testing/config_errors.h"
@@ -63,9 +64,9 @@ training:
   write_constant(config.parent_path() / "pictures/c.png", 8, 8, 230.0f / 255.0f);
   const double mean = (51.0 + 102.0 + 230.0) / 3.0 / 255.0;
   RunSetup setup = load_run(config, {});
-  const std::vector<ProblemInstance> tasks = setup.problem->instances(false);
+  const std::vector<ProblemInstance> tasks = instances(*setup.problem, false);
   ASSERT_EQ(tasks.size(), 3u);
-  EXPECT_TRUE(setup.problem->instances(true).empty());
+  EXPECT_TRUE(instances(*setup.problem, true).empty());
   fields::Field<double> field(setup.field);
   Eigen::MatrixXd x(64, 2);
   for (int i = 0; i < 64; ++i) x.row(i) << -1.0 + (2.0 * (i % 8) + 1.0) / 8.0, 1.0 - (2.0 * (i / 8) + 1.0) / 8.0;
