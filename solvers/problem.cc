@@ -17,6 +17,11 @@ void Problem::render_views(const OutputContext&, const RenderRequest&) const {
   throw std::invalid_argument("this problem's field renders no images (nfield render takes a radiance-field checkpoint, problem: nerf)");
 }
 
+std::vector<Eigen::VectorXd> Problem::held_out_parameters() const {
+  if (domain().parameter_count() == 0) return {};
+  return {domain().parameter_middles()};
+}
+
 void Problem::give_input_variances() {
   throw std::logic_error("this problem gives no variances of its points (Problem::gives_input_variances)");
 }
