@@ -46,6 +46,9 @@
 // `type: residual` conditions) read it, as a slot whose current value is filled in at every
 // evaluation. `data:` adds the measurements' loss term. An unknown constant no residual reads
 // is a warning (the data alone cannot tell it); `true:` on a known constant is an error.
+// Parametric fields (issue 28): `nu: {range: [a, b], sampling: uniform | log}` is an input
+// column of the domain (solvers/domain.h, parameters), read by name as x or t are; not with
+// `unknown`; `reference.held_out` lists the values outputs are evaluated at.
 // Limits: a residual reads at most 32 symbols; hard conditions (enforce: hard) take no
 // residual of order above 2.
 #include <algorithm>
