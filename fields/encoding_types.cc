@@ -49,20 +49,6 @@ class Abs final : public autodiff::ElementwiseFunction<Scalar> {
   }
 };
 
-// z itself: derivative 1, no higher ones.
-template <typename Scalar>
-class Linear final : public autodiff::ElementwiseFunction<Scalar> {
- public:
-  void derivatives(const Eigen::Ref<const autodiff::Matrix<Scalar>>& z, int max_order,
-                   std::vector<autodiff::Matrix<Scalar>>& tables) const override {
-    tables.resize(max_order + 1);
-    for (auto& table : tables) table.resize(z.rows(), z.cols());
-    tables[0] = z;
-    if (max_order >= 1) tables[1].setOnes();
-    for (int m = 2; m <= max_order; ++m) tables[m].setZero();
-  }
-};
-
 // γ(x) = [x if include_input, s ⊙ sin(x Bᵀ), s ⊙ cos(x Bᵀ)] as one sine over [B; B] with
 // phases [0; π/2]; s (one per row of B) empty: all 1.
 template <typename Scalar>
@@ -88,31 +74,6 @@ class IdentityType final : public EncodingTypeOf<IdentityType> {
   static std::unique_ptr<autodiff::Module<Scalar>> make(const EncodingOptions&, int) {
     return nullptr;
   }
-};
-
-// box: γ(x) = 2(x − lower)/(upper − lower) − 1, the field's box (EncodingOptions::lower,
-// upper: the domain's, with a parametric field's ranges) onto [−1, 1]^d. Why: a network's
-// first layer sees each input at the scale it comes in; a parameter column of small extent (a
-// viscosity in [0.005, 0.05]) would need weights a hundred times those of x to move the
-// field as much, which Adam's steps of about lr take thousands of steps to grow.
-class BoxType final : public EncodingTypeOf<BoxType> {
- public:
-  Eigen::MatrixXd matrix(const EncodingOptions& o, int input_dim) const override {
-    Eigen::MatrixXd w = Eigen::MatrixXd::Zero(input_dim, input_dim);
-    for (int i = 0; i < input_dim; ++i) w(i, i) = 2.0 / (upper(o, i) - lower(o, i));
-    return w;
-  }
-  template <typename Scalar>
-  static std::unique_ptr<autodiff::Module<Scalar>> make(const EncodingOptions& o, int input_dim) {
-    Eigen::VectorXd offsets(input_dim);
-    for (int i = 0; i < input_dim; ++i) offsets(i) = -(upper(o, i) + lower(o, i)) / (upper(o, i) - lower(o, i));
-    return std::make_unique<FeatureEncoding<Scalar>>(BoxType().matrix(o, input_dim), offsets,
-                                                     std::make_unique<Linear<Scalar>>(), false);
-  }
-
- private:
-  static double lower(const EncodingOptions& o, int i) { return o.lower.empty() ? 0.0 : o.lower[static_cast<std::size_t>(i)]; }
-  static double upper(const EncodingOptions& o, int i) { return o.upper.empty() ? 1.0 : o.upper[static_cast<std::size_t>(i)]; }
 };
 
 class PositionalType final : public EncodingTypeOf<PositionalType> {
@@ -265,7 +226,6 @@ const EncodingRegistry& encodings() {
   static const EncodingRegistry registry = [] {
     EncodingRegistry r("encoding");
     r.add("identity", std::make_unique<IdentityType>());
-    r.add("box", std::make_unique<BoxType>());
     r.add("positional", std::make_unique<PositionalType>());
     r.add("fourier", std::make_unique<FourierType>());
     r.add("cusp", std::make_unique<CuspType>());

@@ -7,7 +7,6 @@
 //   fourier     γ(x) = [sin(2π B x), cos(2π B x)], B ~ N(0, σ²), m × d (Tancik et al. 2020)
 //   cusp        γ(x) = [x, |x_a − c₁|, …, |x_a − c_k|] for planes x_a = c_k
 //   identity    γ(x) = x (no module)
-//   box         γ(x) = 2(x − lower)/(upper − lower) − 1: the domain's box onto [−1, 1]^d
 //   hash_grid   trainable multiresolution grids (Müller et al. 2022), fields/hash_grid.h
 //   integrated_positional  E[γ(x)] for x ~ N(μ, diag σ²): the positional encoding damped
 //               by e^{−½ω²σ²}, input [μ, σ²] (mip-NeRF; Barron 2021), fields/integrated_positional.h
@@ -73,7 +72,7 @@ struct EncodingOptions {
   // The box [lower, upper] the inputs come from (the field's domain), one bound per input
   // (per coordinate, for an encoding that reads variances beside them);
   // both empty: [0, 1]^d. Set by the program from the problem's domain, not a config key;
-  // saved with the field. Only hash_grid and box read it.
+  // saved with the field. Only hash_grid reads it.
   std::vector<double> lower, upper;
 
   // Throws std::invalid_argument naming the field, its value and the rule.

@@ -223,38 +223,6 @@ TEST(NormalizedPositionalEncoding, ScalesOctaveLByTwoToTheMinusL) {
   EXPECT_GT(relative_error(b.data, a.data, 1e-12), 1e-3);
 }
 
-// encoding.type box maps the field's box onto [−1, 1]^d: the same network as the identity
-// encoding at z = 2(x − lower)/(upper − lower) − 1, its gradient scaled by 2/(upper − lower)
-// per axis (a parametric field's ν ∈ [0.005, 0.05] reaches the first layer as x does).
-TEST(BoxEncoding, IsTheIdentityOfTheScaledInputs) {
-  FieldOptions o;
-  o.type = "mlp";
-  o.activation = "tanh";
-  o.input_dim = 3;
-  o.hidden = {8, 8};
-  const Field<double> plain(o);
-  o.encoding.type = "box";
-  o.encoding.lower = {-1.0, 0.0, 0.005};
-  o.encoding.upper = {1.0, 1.0, 0.05};
-  Field<double> box(o);
-  ASSERT_EQ(box.parameter_count(), plain.parameter_count());
-  box.parameters() = plain.parameters();
-  std::mt19937_64 rng(4);
-  Eigen::MatrixXd z = random_matrix(6, 3, rng);  // in [−1, 1]
-  Eigen::MatrixXd x(z.rows(), 3);
-  for (int i = 0; i < 3; ++i)
-    x.col(i) = o.encoding.lower[i] + (z.col(i).array() + 1) * 0.5 * (o.encoding.upper[i] - o.encoding.lower[i]);
-  const autodiff::StreamLayout layout(autodiff::StreamSpec::gradient(3));
-  autodiff::Streams<double> a, b;
-  plain.evaluate(layout, z, a);
-  box.evaluate(layout, x, b);
-  EXPECT_LT(relative_error(b.stream(0), a.stream(0), 1e-12), 1e-13);
-  for (int i = 0; i < 3; ++i) {
-    const double scale = 2 / (o.encoding.upper[i] - o.encoding.lower[i]);
-    EXPECT_LT(relative_error(b.stream(1 + i), (scale * a.stream(1 + i)).eval(), 1e-12), 1e-12) << "axis " << i;
-  }
-}
-
 TEST(FloatStreams, MatchDoubleWithinFloatRounding) {
   for (int dim = 2; dim <= 3; ++dim) {
     FieldOptions o;
