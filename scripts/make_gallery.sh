@@ -8,7 +8,7 @@
 #   5. autoint_cos.yaml         an integrand and the derivative of its trained antiderivative
 # Usage: scripts/make_gallery.sh [OUT]   (runs in OUT, default out/gallery; about 15 minutes
 # on 2 quiet cores, most of it the 10-minute radiance field). NFIELD_ARGS adds arguments to
-# every run (e.g. "--set training.threads=1").
+# every run (e.g. "--set training.threads=1"); PYTHON names a python3 with NumPy and Pillow.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=${1:-out/gallery}
@@ -18,5 +18,5 @@ for config in lid_driven_cavity allen_cahn_1d sdf_bunny nerf_bunny_hash_grid aut
   # shellcheck disable=SC2086
   "$nfield" run "configs/$config.yaml" --out "$out/$config" ${NFIELD_ARGS:-}
 done
-python3 scripts/render_mesh.py "$out/sdf_bunny/surface.ply" "$out/sdf_bunny/surface.png" --size 384
-python3 scripts/compose_gallery.py "$out" docs/images
+"${PYTHON:-python3}" scripts/render_mesh.py "$out/sdf_bunny/surface.ply" "$out/sdf_bunny/surface.png" --size 384
+"${PYTHON:-python3}" scripts/compose_gallery.py "$out" docs/images

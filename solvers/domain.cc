@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: MIT
 #include "solvers/domain.h"
 
+#include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 #include "io/registry.h"
@@ -10,6 +12,20 @@
 namespace nfield::solvers {
 namespace {
 const char* const kAxes[] = {"x", "y", "z"};
+}
+
+void DomainParameter::validate() const {
+  if (!(std::isfinite(lower) && std::isfinite(upper) && lower < upper))
+    throw std::invalid_argument("parameter '" + name + "': range [" + std::to_string(lower) + ", " +
+                                std::to_string(upper) + "] must be finite with lower < upper");
+  if (log && !(lower > 0))
+    throw std::invalid_argument("parameter '" + name + "': log sampling needs lower > 0, got " +
+                                std::to_string(lower));
+}
+
+double DomainParameter::at(double u) const {
+  if (log) return std::exp(std::log(lower) + u * (std::log(upper) - std::log(lower)));
+  return lower + u * (upper - lower);
 }
 
 std::string Face::name() const { return std::string(kAxes[axis]) + (upper ? "_max" : "_min"); }
@@ -85,10 +101,45 @@ Domain Domain::from_config(const io::ConfigNode& node) {
   return Domain(lower, upper, read_time(node));
 }
 
+void Domain::add_parameter(DomainParameter parameter) {
+  parameter.validate();
+  const std::vector<std::string> names = input_names();
+  if (std::find(names.begin(), names.end(), parameter.name) != names.end() || parameter.name == "x" ||
+      parameter.name == "y" || parameter.name == "z" || parameter.name == "t")
+    throw std::invalid_argument("parameter '" + parameter.name + "': the name is taken by an input");
+  parameters_.push_back(std::move(parameter));
+}
+
+int Domain::parameter_index(const std::string& name) const {
+  for (int k = 0; k < parameter_count(); ++k)
+    if (parameters_[static_cast<std::size_t>(k)].name == name) return k;
+  return -1;
+}
+
+Eigen::VectorXd Domain::parameter_middles() const {
+  Eigen::VectorXd v(parameter_count());
+  for (int k = 0; k < parameter_count(); ++k) v(k) = parameters_[static_cast<std::size_t>(k)].middle();
+  return v;
+}
+
+void Domain::map_parameters(Eigen::MatrixXd& x) const {
+  for (int k = 0; k < parameter_count(); ++k) {
+    const DomainParameter& p = parameters_[static_cast<std::size_t>(k)];
+    for (Eigen::Index r = 0; r < x.rows(); ++r) x(r, parameter_column(k)) = p.at(x(r, parameter_column(k)));
+  }
+}
+
+void Domain::draw_parameters(Random& rng, Eigen::MatrixXd& x) const {
+  if (parameters_.empty()) return;
+  x.rightCols(parameter_count()) = unit_points(rng, x.rows(), parameter_count());
+  map_parameters(x);
+}
+
 Eigen::VectorXd Domain::input_lower() const {
   Eigen::VectorXd v(input_dim());
   for (int i = 0; i < space_dim(); ++i) v(i) = lower_[i];
   if (has_time()) v(time_column()) = time_->first;
+  for (int k = 0; k < parameter_count(); ++k) v(parameter_column(k)) = parameters_[static_cast<std::size_t>(k)].lower;
   return v;
 }
 
@@ -96,12 +147,14 @@ Eigen::VectorXd Domain::input_upper() const {
   Eigen::VectorXd v(input_dim());
   for (int i = 0; i < space_dim(); ++i) v(i) = upper_[i];
   if (has_time()) v(time_column()) = time_->second;
+  for (int k = 0; k < parameter_count(); ++k) v(parameter_column(k)) = parameters_[static_cast<std::size_t>(k)].upper;
   return v;
 }
 
 std::vector<std::string> Domain::input_names() const {
   std::vector<std::string> names(kAxes, kAxes + space_dim());
   if (has_time()) names.push_back("t");
+  for (const DomainParameter& p : parameters_) names.push_back(p.name);
   return names;
 }
 
@@ -134,11 +187,13 @@ Eigen::MatrixXd Domain::sample_interior(Random& rng, Eigen::Index n) const {
     x.leftCols(space_dim()) = geometry_->sample_interior(rng, n);
     if (has_time())
       x.col(time_column()) = time_->first + (time_->second - time_->first) * unit_points(rng, n, 1).col(0).array();
+    draw_parameters(rng, x);
     return x;
   }
   const Eigen::VectorXd lo = input_lower(), hi = input_upper();
   Eigen::MatrixXd x = unit_points(rng, n, input_dim());
-  for (int c = 0; c < input_dim(); ++c) x.col(c) = lo(c) + (hi(c) - lo(c)) * x.col(c).array();
+  for (int c = 0; c < coordinate_dim(); ++c) x.col(c) = lo(c) + (hi(c) - lo(c)) * x.col(c).array();
+  map_parameters(x);
   return x;
 }
 
@@ -176,7 +231,8 @@ Eigen::MatrixXd Domain::sample_faces(const std::vector<Face>& faces, Random& rng
     for (Eigen::Index r = 0; r < n; ++r) pick(r) = uniform01(rng);
   }
   const Eigen::VectorXd lo = input_lower(), hi = input_upper();
-  for (int c = 0; c < input_dim(); ++c) x.col(c) = lo(c) + (hi(c) - lo(c)) * x.col(c).array();
+  for (int c = 0; c < coordinate_dim(); ++c) x.col(c) = lo(c) + (hi(c) - lo(c)) * x.col(c).array();
+  map_parameters(x);
   for (Eigen::Index r = 0; r < n; ++r) {
     const double u = pick(r) * total;
     size_t k = 0;
@@ -191,6 +247,7 @@ Eigen::MatrixXd Domain::sample_initial(Random& rng, Eigen::Index n) const {
     Eigen::MatrixXd x(n, input_dim());
     x.leftCols(space_dim()) = geometry_->sample_interior(rng, n);
     if (has_time()) x.col(time_column()).setConstant(time_->first);
+    draw_parameters(rng, x);
     return x;
   }
   if (rng.sequence() && has_time()) {
@@ -200,6 +257,7 @@ Eigen::MatrixXd Domain::sample_initial(Random& rng, Eigen::Index n) const {
     for (int c = 0; c < space_dim(); ++c)
       x.col(c) = lower_[c] + (upper_[c] - lower_[c]) * x.col(c).array();
     x.col(time_column()).setConstant(time_->first);
+    draw_parameters(rng, x);
     return x;
   }
   Eigen::MatrixXd x = sample_interior(rng, n);
@@ -223,6 +281,7 @@ Domain::BoundaryPoints Domain::sample_boundary(const geometry::Selection& select
   if (has_time())
     out.points.col(time_column()) =
         time_->first + (time_->second - time_->first) * unit_points(rng, n, 1).col(0).array();
+  draw_parameters(rng, out.points);
   return out;
 }
 

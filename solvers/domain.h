@@ -20,6 +20,17 @@
 // (solvers/geometry/geometry_config.h), read by from_config with the config's folder; the
 // conditions then name parts (condition_list.h), the hard ansatz takes φ from
 // Geometry::distance (hard_constraints.h), and the grid outputs mask the points outside.
+//
+// Parameters (a parametric field, issue 28): a constant declared as a range (`constants:
+// {nu: {range: [0.005, 0.05]}}`, solvers/problems/pde.cc) becomes one more input column,
+// after the coordinates: (x, t, nu). The domain is the one place that knows these columns:
+// input_dim() counts them, input_names() names them (so expressions read `nu` as the
+// column), and every sampler (interior, faces, initial slice, geometry boundary) draws each
+// point's parameters from their ranges, uniform or log-uniform. Derivative streams differentiate
+// along the tangents a term asks for, so a parameter column is a passive input unless an
+// expression differentiates by it: u_x, u_xx, lap(u) have zero tangent entries there. Faces,
+// normals, the initial slice and the grid outputs concern the coordinates only; a grid is
+// evaluated at one given value of the parameters (GridMetrics per held-out value, run.cc).
 #pragma once
 
 #include <filesystem>
@@ -39,6 +50,19 @@ class Geometry;
 struct Selection;
 struct Measure;
 }  // namespace geometry
+
+// A parameter column: its name, range and how points draw it.
+struct DomainParameter {
+  std::string name;
+  double lower = 0, upper = 1;  // lower < upper; lower > 0 for log
+  bool log = false;             // log-uniform (each decade the same share) rather than uniform
+  // Throws std::invalid_argument naming the field, its value and the rule.
+  void validate() const;
+  // The value at u ∈ [0, 1] of the unit interval.
+  double at(double u) const;
+  // The middle of the range (geometric for log): the value a grid is evaluated at by default.
+  double middle() const { return at(0.5); }
+};
 
 struct Face {
   int axis = 0;        // space axis
@@ -62,12 +86,24 @@ class Domain {
 
   int space_dim() const { return static_cast<int>(lower_.size()); }
   bool has_time() const { return time_.has_value(); }
-  int input_dim() const { return space_dim() + (has_time() ? 1 : 0); }
+  // The coordinates (space, then t), then the parameters: a field's input columns.
+  int coordinate_dim() const { return space_dim() + (has_time() ? 1 : 0); }
+  int input_dim() const { return coordinate_dim() + parameter_count(); }
+  // Adds a parameter column after the coordinates and those added before (the name must be
+  // new: not x, y, z, t or another parameter's). Throws std::invalid_argument.
+  void add_parameter(DomainParameter parameter);
+  const std::vector<DomainParameter>& parameters() const { return parameters_; }
+  int parameter_count() const { return static_cast<int>(parameters_.size()); }
+  int parameter_column(int k) const { return coordinate_dim() + k; }
+  // The parameter's index, -1 when `name` is none.
+  int parameter_index(const std::string& name) const;
+  // The middle value of each parameter (DomainParameter::middle).
+  Eigen::VectorXd parameter_middles() const;
   int time_column() const { return space_dim(); }
   const std::vector<double>& lower() const { return lower_; }
   const std::vector<double>& upper() const { return upper_; }
   std::pair<double, double> time() const { return time_.value_or(std::pair{0.0, 0.0}); }
-  // Input lower/upper including time.
+  // Input lower/upper including time and the parameters' ranges.
   Eigen::VectorXd input_lower() const;
   Eigen::VectorXd input_upper() const;
 
@@ -111,7 +147,12 @@ class Domain {
  private:
   double face_measure(const Face& face) const;
   void require_box(const char* what) const;
+  // Draws the parameter columns of x from their ranges (unit points of the engine's own).
+  void draw_parameters(Random& rng, Eigen::MatrixXd& x) const;
+  // Maps unit-interval columns of x onto the parameters' ranges.
+  void map_parameters(Eigen::MatrixXd& x) const;
   std::vector<double> lower_, upper_;
+  std::vector<DomainParameter> parameters_;
   std::shared_ptr<const geometry::Geometry> geometry_;
   std::optional<std::pair<double, double>> time_;
 };

@@ -83,6 +83,11 @@ class Problem {
   // problem's residuals read their current values. Null: none.
   virtual std::shared_ptr<UnknownConstants> unknowns() const { return nullptr; }
 
+  // A parametric field (Domain::parameters, solvers/domain.h): the parameter values its grid
+  // outputs and errors are evaluated at, each parameter_count() long (the held-out values of
+  // the config). Default: each range's middle; empty when the domain has no parameters.
+  virtual std::vector<Eigen::VectorXd> held_out_parameters() const;
+
   virtual bool has_exact() const { return false; }
   // Exact or reference solution at x (n × output_dim).
   virtual Eigen::MatrixXd exact(const Eigen::MatrixXd& x) const;

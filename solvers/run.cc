@@ -221,6 +221,16 @@ nlohmann::ordered_json run_metrics(const RunSetup& setup, Trainer<Scalar>& train
       metrics["frame_rel_l2"] = grid.frame_rel_l2;
       metrics["frame_times"] = grid.frame_times;
     }
+    // A parametric field: rel_l2 above is the worst held-out value's; each value's figures.
+    for (const HeldOutMetrics& h : grid.held_out) {
+      nlohmann::ordered_json item;
+      for (const auto& [name, value] : h.parameters) item[name] = value;
+      item["rel_l2"] = h.rel_l2;
+      item["max_abs_err"] = h.max_abs_err;
+      if (setup.problem->domain().has_time()) item["max_frame_rel_l2"] = h.max_frame_rel_l2;
+      item["dir"] = h.dir;
+      metrics["held_out"].push_back(item);
+    }
   }
   if (setup.problem->writes_grid_outputs()) metrics["residual_rms"] = grid.residual_rms;
   if (setup.problem->domain().geometry()) {

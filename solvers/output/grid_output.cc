@@ -28,11 +28,13 @@ Eigen::MatrixXd as_vtk_vector(const Eigen::MatrixXd& v) {
   return out;
 }
 
-// The evaluation points of frame k: the space grid, at the frame's time when there is one.
+// The evaluation points of frame k: the space grid, at the frame's time when there is one,
+// at the given parameter values (a parametric field).
 Eigen::MatrixXd frame_points(const Domain& domain, const Eigen::MatrixXd& space, int k, int frames,
-                             double* t) {
+                             double* t, const Eigen::VectorXd& parameters) {
   Eigen::MatrixXd x(space.rows(), domain.input_dim());
   x.leftCols(domain.space_dim()) = space;
+  for (int p = 0; p < domain.parameter_count(); ++p) x.col(domain.parameter_column(p)).setConstant(parameters(p));
   *t = 0;
   if (domain.has_time()) {
     const auto [t0, t1] = domain.time();
@@ -103,10 +105,8 @@ struct ErrorSums {
   }
 };
 
-}  // namespace
-
-GridMetrics grid_error(const Problem& problem, const StreamEvaluator& evaluate,
-                       const OutputOptions& output) {
+GridMetrics grid_error_at(const Problem& problem, const StreamEvaluator& evaluate, const OutputOptions& output,
+                          const Eigen::VectorXd& parameters) {
   GridMetrics metrics;
   if (!problem.has_exact()) return metrics;
   const Domain& domain = problem.domain();
@@ -116,7 +116,7 @@ GridMetrics grid_error(const Problem& problem, const StreamEvaluator& evaluate,
   ErrorSums sums;
   for (int k = 0; k < frames; ++k) {
     double t;
-    const Eigen::MatrixXd x = frame_points(domain, space, k, frames, &t);
+    const Eigen::MatrixXd x = frame_points(domain, space, k, frames, &t, parameters);
     const Eigen::MatrixXd exact = problem.exact(x);
     ErrorSums frame;
     frame.add(values_at(evaluate, domain, x) - exact, exact, error_mask(problem, x) && domain.contains_rows(x));
@@ -131,8 +131,8 @@ GridMetrics grid_error(const Problem& problem, const StreamEvaluator& evaluate,
   return metrics;
 }
 
-GridMetrics write_grid_outputs(const Problem& problem, const StreamEvaluator& evaluate,
-                               const OutputOptions& output, const OutputContext* scales) {
+GridMetrics write_grid_at(const Problem& problem, const StreamEvaluator& evaluate, const OutputOptions& output,
+                          const OutputContext* scales, const Eigen::VectorXd& parameters) {
   const Domain& domain = problem.domain();
   const int d = domain.space_dim(), channels = problem.output_dim();
   const io::Grid grid = io::make_grid(domain.lower(), domain.upper(), output.grid);
@@ -155,7 +155,7 @@ GridMetrics write_grid_outputs(const Problem& problem, const StreamEvaluator& ev
   Eigen::MatrixXd xt_image(frames, grid.dims[0]);  // 1D + time preview
   for (int k = 0; k < frames; ++k) {
     double t;
-    const Eigen::MatrixXd x = frame_points(domain, space, k, frames, &t);
+    const Eigen::MatrixXd x = frame_points(domain, space, k, frames, &t, parameters);
     // A shaped domain: the grid covers its bounding box; points outside are masked (`inside`
     // = 0) and every array there is NaN, which ParaView leaves blank (threshold on `inside`).
     const Eigen::Array<bool, Eigen::Dynamic, 1> inside = domain.contains_rows(x);
@@ -243,6 +243,74 @@ GridMetrics write_grid_outputs(const Problem& problem, const StreamEvaluator& ev
   if (metrics.has_error) sums.report(metrics);
   if (residual_count > 0) metrics.residual_rms = std::sqrt(residual_sq / residual_count);
   return metrics;
+}
+
+// The folder of a held-out value: held_out_nu_0.01 (names and values, %g).
+std::string held_out_folder(const Domain& domain, const Eigen::VectorXd& parameters) {
+  std::string name = "held_out";
+  for (int p = 0; p < domain.parameter_count(); ++p) {
+    char value[40];
+    std::snprintf(value, sizeof value, "_%s_%g", domain.parameters()[static_cast<std::size_t>(p)].name.c_str(),
+                  parameters(p));
+    name += value;
+  }
+  return name;
+}
+
+// The held-out values' figures gathered: the worst of each, residual_rms over all.
+GridMetrics gather_held_out(const Domain& domain, const std::vector<Eigen::VectorXd>& values,
+                            const std::vector<GridMetrics>& each) {
+  GridMetrics all;
+  double residual_sq = 0;
+  for (std::size_t i = 0; i < each.size(); ++i) {
+    const GridMetrics& m = each[i];
+    HeldOutMetrics h;
+    for (int p = 0; p < domain.parameter_count(); ++p)
+      h.parameters.emplace_back(domain.parameters()[static_cast<std::size_t>(p)].name, values[i](p));
+    h.dir = held_out_folder(domain, values[i]);
+    h.rel_l2 = m.rel_l2;
+    h.max_abs_err = m.max_abs_err;
+    for (const double f : m.frame_rel_l2) h.max_frame_rel_l2 = max_or_nan(h.max_frame_rel_l2, f);
+    all.held_out.push_back(h);
+    all.has_error = m.has_error;
+    all.rel_l2 = i == 0 ? m.rel_l2 : max_or_nan(all.rel_l2, m.rel_l2);
+    all.max_abs_err = i == 0 ? m.max_abs_err : max_or_nan(all.max_abs_err, m.max_abs_err);
+    all.output_rel_l2.resize(m.output_rel_l2.size());
+    all.output_max_abs_err.resize(m.output_max_abs_err.size());
+    for (std::size_t c = 0; c < m.output_rel_l2.size(); ++c) {
+      all.output_rel_l2[c] = i == 0 ? m.output_rel_l2[c] : max_or_nan(all.output_rel_l2[c], m.output_rel_l2[c]);
+      all.output_max_abs_err[c] =
+          i == 0 ? m.output_max_abs_err[c] : max_or_nan(all.output_max_abs_err[c], m.output_max_abs_err[c]);
+    }
+    residual_sq += m.residual_rms * m.residual_rms;
+  }
+  if (!each.empty()) all.residual_rms = std::sqrt(residual_sq / static_cast<double>(each.size()));
+  return all;
+}
+
+}  // namespace
+
+GridMetrics grid_error(const Problem& problem, const StreamEvaluator& evaluate, const OutputOptions& output) {
+  const std::vector<Eigen::VectorXd> values = problem.held_out_parameters();
+  if (problem.domain().parameter_count() == 0) return grid_error_at(problem, evaluate, output, {});
+  std::vector<GridMetrics> each;
+  for (const Eigen::VectorXd& v : values) each.push_back(grid_error_at(problem, evaluate, output, v));
+  return gather_held_out(problem.domain(), values, each);
+}
+
+GridMetrics write_grid_outputs(const Problem& problem, const StreamEvaluator& evaluate,
+                               const OutputOptions& output, const OutputContext* scales) {
+  const Domain& domain = problem.domain();
+  if (domain.parameter_count() == 0) return write_grid_at(problem, evaluate, output, scales, {});
+  const std::vector<Eigen::VectorXd> values = problem.held_out_parameters();
+  std::vector<GridMetrics> each;
+  for (const Eigen::VectorXd& v : values) {
+    OutputOptions own = output;
+    own.dir = output.dir / held_out_folder(domain, v);
+    std::filesystem::create_directories(own.dir);
+    each.push_back(write_grid_at(problem, evaluate, own, scales, v));
+  }
+  return gather_held_out(domain, values, each);
 }
 
 }  // namespace nfield::solvers

@@ -3,6 +3,12 @@
 // A trained field sampled on the output grid: values, gradients, the PDE residual, the exact
 // solution and the error, as VTK image files (one per time frame, gathered in a .pvd), a PNG
 // preview and the error metrics.
+//
+// A parametric field (solvers/domain.h, parameters) is written at each of the problem's
+// held-out parameter values (Problem::held_out_parameters), each into its own folder of the
+// output directory (held_out_nu_0.01/solution.pvd, …), each with its errors against its own
+// reference; the GridMetrics then report the worst of them (rel_l2, max_abs_err, per output)
+// and each in held_out. Frames of one held-out value are not listed at the top.
 #pragma once
 
 #include <filesystem>
@@ -21,6 +27,13 @@ namespace nfield::solvers {
 using StreamEvaluator = std::function<autodiff::Streams<double>(const autodiff::StreamLayout&,
                                                                 const Eigen::MatrixXd&)>;
 
+// One held-out parameter value's figures.
+struct HeldOutMetrics {
+  std::vector<std::pair<std::string, double>> parameters;  // name → value
+  std::string dir;                                          // its folder in the output directory
+  double rel_l2 = 0, max_abs_err = 0, max_frame_rel_l2 = 0;
+};
+
 struct GridMetrics {
   bool has_error = false;
   double rel_l2 = 0;
@@ -30,6 +43,8 @@ struct GridMetrics {
   double residual_rms = 0;
   // Time-dependent problems: rel_l2 of each output frame, at frame_times.
   std::vector<double> frame_rel_l2, frame_times;
+  // A parametric field: each held-out value's figures (empty otherwise).
+  std::vector<HeldOutMetrics> held_out;
 };
 
 // rel_l2 and max_abs_err on the output grid (and frames) without writing anything; the

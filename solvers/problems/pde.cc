@@ -48,6 +48,9 @@
 // is a warning (the data alone cannot tell it); `true:` on a known constant is an error.
 // Unknown fields (`unknown_fields: {a: {true: EXPR}}`, solvers/problems/pde_unknown_fields.h)
 // are extra outputs of the field after `outputs`, read by residuals as the outputs are.
+// Parametric fields (issue 28): `nu: {range: [a, b], sampling: uniform | log}` is an input
+// column of the domain (solvers/domain.h, parameters), read by name as x or t are; not with
+// `unknown`; `reference.held_out` lists the values outputs are evaluated at.
 // Limits: a residual reads at most 32 symbols; hard conditions (enforce: hard) take no
 // residual of order above 2.
 #include <algorithm>
@@ -185,6 +188,9 @@ class Pde final : public Problem {
   }
 
   std::shared_ptr<const Ansatz> ansatz() const override { return ansatz_; }
+  std::vector<Eigen::VectorXd> held_out_parameters() const override {
+    return reference_.held_out().empty() ? Problem::held_out_parameters() : reference_.held_out();
+  }
   bool has_exact() const override { return reference_.has_exact(); }
   // The outputs' reference, then the unknown fields' truths.
   Eigen::MatrixXd exact(const Eigen::MatrixXd& x) const override {
@@ -249,6 +255,10 @@ class Pde final : public Problem {
           : contains(outputs_, name.substr(0, name.find('_'))) ? "reads as an output or its derivative"
                                                                 : "";
       if (!problem.empty()) throw node.error(name, "constant name '" + name + "' " + problem);
+      if (node.has_map(name) && node.child(name).has("range")) {
+        read_parameter(node.child(name), name);
+        continue;
+      }
       if (node.has_map(name)) {
         read_unknown(node.child(name), name);
         continue;
@@ -260,6 +270,26 @@ class Pde final : public Problem {
       node.require(name, std::isfinite(value), "constant '" + name + "' is not finite");
       constants_.emplace_back(name, value);
     }
+  }
+
+  // `name: {range: [lower, upper], sampling: uniform | log}`: a parameter column of the field
+  // (solvers/domain.h, DomainParameter); expressions read it as they read x or t.
+  void read_parameter(const io::ConfigNode& node, const std::string& name) {
+    if (node.has("unknown"))
+      throw node.error("unknown", "'" + name + "' is declared as a range (a field input) and as unknown; "
+                                  "give one: range: [lower, upper] or unknown: true");
+    DomainParameter p;
+    p.name = name;
+    const std::vector<double> range = node.get_list<double>("range", 2);
+    p.lower = range[0];
+    p.upper = range[1];
+    node.require("range", std::isfinite(p.lower) && std::isfinite(p.upper) && p.lower < p.upper,
+                 "expected [lower, upper] with lower < upper, got [" + io::format_number(p.lower) + ", " +
+                     io::format_number(p.upper) + "]");
+    if (node.has("sampling")) p.log = node.get_choice("sampling", {"uniform", "log"}) == "log";
+    node.require("sampling", !p.log || p.lower > 0, "log sampling needs a range with lower > 0");
+    node.reject_unknown_keys();
+    domain_.add_parameter(p);
   }
 
   // `name: {unknown: true, initial, positive | bounds, true, lr}` (solvers/unknowns.h).

@@ -24,6 +24,7 @@ PdeReference::PdeReference(const io::ConfigNode& node, const Domain& domain, con
       outputs_(static_cast<int>(outputs.size())),
       defaults_(static_cast<int>(defaults > 0 ? defaults : outputs.size())) {
   const std::vector<std::string> own(outputs.begin(), outputs.begin() + defaults_);
+  if (node.has("held_out")) read_held_out(node);
   const int given = (node.has("exact") ? 1 : 0) + (node.has("solution") ? 1 : 0) + (node.has("file") ? 1 : 0);
   node.require(given == 1, "expected one of exact, solution, file");
   if (node.has("solution"))
@@ -35,7 +36,42 @@ PdeReference::PdeReference(const io::ConfigNode& node, const Domain& domain, con
   node.reject_unknown_keys();
 }
 
+// `held_out: {nu: [0.007, 0.012, …]}`: a list per parameter, all of one length; value i of
+// each list makes held-out point i. Values must lie in the parameter's range.
+void PdeReference::read_held_out(const io::ConfigNode& node) {
+  const io::ConfigNode held = node.child("held_out");
+  std::vector<std::string> names;
+  for (const DomainParameter& p : domain_.parameters()) names.push_back(p.name);
+  node.require("held_out", domain_.parameter_count() > 0 && held.is_map(),
+               domain_.parameter_count() > 0
+                   ? "expected a mapping of each parameter (" + io::join(names) + ") to a list of values"
+                   : "held-out values are for parameters (a constant given as {range: [lower, upper]}); this "
+                     "problem has none");
+  for (const std::string& key : held.keys())
+    if (domain_.parameter_index(key) < 0)
+      throw held.error(key, "'" + key + "' is no parameter (parameters: " + io::join(names) + ")");
+  std::size_t count = 0;
+  for (int k = 0; k < domain_.parameter_count(); ++k) {
+    const DomainParameter& p = domain_.parameters()[static_cast<std::size_t>(k)];
+    if (!held.has(p.name)) throw held.error("missing the held-out values of parameter '" + p.name + "'");
+    const std::vector<double> values = held.get<std::vector<double>>(p.name);
+    held.require(p.name, !values.empty() && (k == 0 || values.size() == count),
+                 k == 0 ? "expected a non-empty list of values"
+                        : "expected " + std::to_string(count) + " values, as many as '" +
+                              domain_.parameters()[0].name + "' has");
+    count = values.size();
+    held_out_.resize(count, Eigen::VectorXd::Zero(domain_.parameter_count()));
+    for (std::size_t i = 0; i < count; ++i) {
+      held.require(p.name, values[i] >= p.lower && values[i] <= p.upper,
+                   "held-out value " + io::format_number(values[i]) + " lies outside the range [" +
+                       io::format_number(p.lower) + ", " + io::format_number(p.upper) + "]");
+      held_out_[i](k) = values[i];
+    }
+  }
+}
+
 Eigen::MatrixXd PdeReference::exact(const Eigen::MatrixXd& x) const {
+  if (burgers_ && burgers_column_ >= 0) return burgers_per_row(x);
   if (burgers_ || allen_cahn_) {
     Eigen::MatrixXd xt(x.rows(), 2);
     xt << x.col(0), x.col(domain_.time_column());
@@ -80,10 +116,43 @@ void PdeReference::read_named_solution(const io::ConfigNode& node, int outputs, 
     read_allen_cahn(node, e);
 }
 
-// `nu: EXPRESSION`: on x ∈ [−1, 1] (any part of it) and t ∈ [0, 10].
+// The Cole–Hopf solution at ν = each row's parameter column: one parallel pass per distinct
+// value (a grid frame has one; sampled points have as many as rows).
+Eigen::MatrixXd PdeReference::burgers_per_row(const Eigen::MatrixXd& x) const {
+  std::vector<double> values(x.rows());
+  for (Eigen::Index r = 0; r < x.rows(); ++r) values[static_cast<std::size_t>(r)] = x(r, burgers_column_);
+  std::sort(values.begin(), values.end());
+  values.erase(std::unique(values.begin(), values.end()), values.end());
+  Eigen::MatrixXd out(x.rows(), 1);
+  for (const double nu : values) {
+    std::vector<Eigen::Index> rows;
+    for (Eigen::Index r = 0; r < x.rows(); ++r)
+      if (x(r, burgers_column_) == nu) rows.push_back(r);
+    Eigen::MatrixXd xt(static_cast<Eigen::Index>(rows.size()), 2);
+    for (std::size_t i = 0; i < rows.size(); ++i)
+      xt.row(static_cast<Eigen::Index>(i)) << x(rows[i], 0), x(rows[i], domain_.time_column());
+    BurgersSineOptions options = *burgers_;
+    options.nu = nu;
+    const Eigen::VectorXd u = burgers_sine_solution(xt, options);
+    for (std::size_t i = 0; i < rows.size(); ++i) out(rows[i], 0) = u(static_cast<Eigen::Index>(i));
+  }
+  return out;
+}
+
+// `nu: EXPRESSION`, or the name of a parameter (its column gives ν per point): on x ∈ [−1, 1]
+// (any part of it) and t ∈ [0, 10].
 void PdeReference::read_burgers(const io::ConfigNode& node, const PdeExpressions& e) {
   node.require("solution", domain_.time().first >= 0 && domain_.time().second <= 10,
                "burgers_sine is computed for t in [0, 10]");
+  const int parameter = domain_.parameter_index(node.get<std::string>("nu"));
+  if (parameter >= 0) {
+    const DomainParameter& p = domain_.parameters()[static_cast<std::size_t>(parameter)];
+    node.require("nu", p.lower >= 1e-4 && p.upper <= 1e3,
+                 "expected the range of parameter '" + p.name + "' inside [1e-4, 1e3] (viscosities)");
+    burgers_column_ = domain_.parameter_column(parameter);
+    burgers_ = BurgersSineOptions{};
+    return;
+  }
   const double nu = e.constant(node, "nu");
   node.require("nu", nu >= 1e-4 && nu <= 1e3, "expected a viscosity in [1e-4, 1e3]");
   BurgersSineOptions options;
@@ -213,10 +282,18 @@ void PdeReference::read_file(const io::ConfigNode& node, const std::vector<std::
     space.col(a) = names.read(table, static_cast<size_t>(a));
     coordinate_columns.push_back(table.names[static_cast<size_t>(table.index(names.of(static_cast<size_t>(a))))]);
   }
+  if (timed && domain_.parameter_count() > 0)
+    throw node.error("file", "a parametric field's points need a column per input (" +
+                                 io::join(domain_.input_names()) + "); the table has no '" +
+                                 names.of(static_cast<size_t>(domain_.time_column())) + "' column");
   std::vector<double> lower(domain_.lower()), upper(domain_.upper());
   if (!timed && domain_.has_time()) {
     lower.push_back(domain_.time().first);
     upper.push_back(domain_.time().second);
+  }
+  for (const DomainParameter& p : domain_.parameters()) {
+    lower.push_back(p.lower);
+    upper.push_back(p.upper);
   }
   try {
     io::require_inside_box(table, coordinate_columns, lower, upper);

@@ -9,6 +9,12 @@
 //   reference: {solution: allen_cahn, diffusion: 1.0e-4,     the ETDRK4 solution from x² cos πx,
 //               reaction: 5, modes: 1024}                   periodic on [−1, 1], t from 0
 //                                                           (solvers/problems/allen_cahn_reference.h)
+//   reference: {solution: burgers_sine, nu: nu,             with a parameter `nu` (a constant
+//               held_out: {nu: [0.006, 0.01, 0.02]}}      given as a range): ν per point from
+//                                                           its column; held_out lists the values
+//                                                           the grid outputs and errors are at
+//                                                           (one list per parameter, one length;
+//                                                           default: each range's middle)
 //   reference:
 //     file: data/heat.csv          # CSV with a header, a whitespace (COMSOL) table, or
 //                                  # "F.h5:/dataset" (io/point_table.h); relative to the config
@@ -106,10 +112,15 @@ class PdeReference {
   bool has_points() const { return !files_.empty(); }
   const std::vector<ReferencePoints>& files() const { return files_; }
   Eigen::Index point_count() const;
+  // `held_out`: the parameter values the field is evaluated at (each parameter_count long;
+  // empty when not given).
+  const std::vector<Eigen::VectorXd>& held_out() const { return held_out_; }
   // The field's errors at the files' points, per output of the problem and over all.
   OutputErrors errors(const FieldValues& field) const;
 
  private:
+  void read_held_out(const io::ConfigNode& node);
+  Eigen::MatrixXd burgers_per_row(const Eigen::MatrixXd& x) const;
   void read_exact(const io::ConfigNode& node, const std::vector<std::string>& outputs, const PdeExpressions& e);
   void read_named_solution(const io::ConfigNode& node, int outputs, const PdeExpressions& e);
   void read_burgers(const io::ConfigNode& node, const PdeExpressions& e);
@@ -127,6 +138,8 @@ class PdeReference {
   int defaults_ = 0;  // of which a file holds without `outputs`
   std::vector<io::CompiledExpression> exact_;
   std::optional<BurgersSineOptions> burgers_;
+  int burgers_column_ = -1;  // ν from this input column (a parameter); -1: burgers_->nu
+  std::vector<Eigen::VectorXd> held_out_;
   std::shared_ptr<const AllenCahnReference> allen_cahn_;  // solved once at load, shared by copies
   std::vector<ReferencePoints> files_;
 };

@@ -363,6 +363,48 @@ TEST(EvalTest, RelativeDataPathsResolveAgainstTheOriginalConfigFolder) {
   EXPECT_TRUE(std::filesystem::exists(dir / "ev" / "solution.vti"));
 }
 
+// A parametric field (constants: {nu: {range: …}}): run and eval write each held-out value's
+// frames into its own folder, metrics.json lists each value's error and reports the worst, and
+// the frames hold the checkpoint's field at the points with the value as their ν column.
+TEST(EvalTest, ParametricFieldIsWrittenPerHeldOutValue) {
+  const auto dir = scratch_dir();
+  write_text(dir / "family.yaml",
+             "problem: pde\n"
+             "domain: {lower: [-1], upper: [1], time: [0, 1]}\n"
+             "constants: {nu: {range: [0.01, 0.05]}}\n"
+             "equation: {residuals: [\"u_t + u*u_x - nu*u_xx\"]}\n"
+             "conditions: [{on: initial, type: value, value: \"-sin(pi*x)\", enforce: hard}]\n"
+             "reference: {solution: burgers_sine, nu: nu, held_out: {nu: [0.02, 0.04]}}\n"
+             "field: {type: mlp, hidden: [8, 8]}\n"
+             "training: {threads: 1, batch: {interior: 32}, stages: [{optimizer: adam, steps: 3}]}\n"
+             "output: {grid: [9], frames: 3, png: false}\n");
+  const auto out = dir / "out";
+  Outcome o = run_nfield({"run", (dir / "family.yaml").string(), "--out", out.string()}, dir, dir / "capture");
+  ASSERT_EQ(o.code, 0) << describe(o);
+  const nlohmann::json metrics = read_json(out / "metrics.json");
+  ASSERT_EQ(metrics["held_out"].size(), 2u) << metrics.dump();
+  const double worst = std::max(metrics["held_out"][0]["rel_l2"].get<double>(), metrics["held_out"][1]["rel_l2"].get<double>());
+  EXPECT_EQ(metrics["rel_l2"].get<double>(), worst);
+  EXPECT_NE(metrics["held_out"][0]["rel_l2"], metrics["held_out"][1]["rel_l2"]);
+  EXPECT_EQ(metrics["held_out"][1]["nu"].get<double>(), 0.04);
+  o = run_nfield({"eval", (out / "checkpoint.h5").string(), "--grid", "5", "--out", (dir / "ev").string()}, dir,
+                 dir / "capture");
+  ASSERT_EQ(o.code, 0) << describe(o);
+  const fields::Field<double> field = fields::load_field<double>(io::H5Reader(out / "checkpoint.h5"));
+  ASSERT_EQ(field.input_dim(), 3);
+  for (const char* folder : {"held_out_nu_0.02", "held_out_nu_0.04"}) {
+    ASSERT_TRUE(std::filesystem::exists(out / folder / "solution.pvd")) << folder;
+    const io::ImageData last = io::read_vti(dir / "ev" / folder / "frame_0002.vti");
+    const Eigen::MatrixXd& u = last.arrays.at("u");
+    ASSERT_EQ(u.rows(), 5);
+    // u = A + D·N with the hard initial value: A = −sin πx, D = (t − t0)/(t1 − t0) = 1 at t = 1.
+    Eigen::MatrixXd x(5, 3);
+    for (int i = 0; i < 5; ++i) x.row(i) << -1 + 0.5 * i, 1.0, std::string(folder) == "held_out_nu_0.02" ? 0.02 : 0.04;
+    const Eigen::MatrixXd n = field.values(x);
+    for (int i = 0; i < 5; ++i) EXPECT_NEAR(u(i, 0), -std::sin(kPi * x(i, 0)) + n(i, 0), 1e-12) << folder << " " << i;
+  }
+}
+
 // The last JSON line of `nfield bench --accuracy` (the summary line follows it).
 nlohmann::json last_case_row(const std::string& out) {
   const size_t at = out.rfind("{\"case\"");

@@ -123,6 +123,33 @@ class RunTest(unittest.TestCase):
             with self.assertRaises(nfield.H5Error):
                 nfield.run(TINY, out=out, resume=TINY)
 
+    def test_parametric_field_takes_the_parameter_as_a_column(self):
+        """A constant given as a range is the field's third input (x, t, nu)."""
+        with tempfile.TemporaryDirectory() as tmp:
+            config = os.path.join(tmp, "family.yaml")
+            with open(config, "w") as f:
+                f.write("problem: pde\n"
+                        "domain: {lower: [-1], upper: [1], time: [0, 1]}\n"
+                        "constants: {nu: {range: [0.01, 0.05]}}\n"
+                        "equation: {residuals: [\"u_t + u*u_x - nu*u_xx\"]}\n"
+                        "conditions: [{on: initial, type: value, value: \"-sin(pi*x)\", enforce: hard}]\n"
+                        "reference: {solution: burgers_sine, nu: nu, held_out: {nu: [0.02, 0.04]}}\n"
+                        "field: {type: mlp, hidden: [8, 8]}\n"
+                        "training: {threads: 1, batch: {interior: 32}, stages: [{optimizer: adam, steps: 3}]}\n"
+                        "output: {grid: [9], frames: 3, png: false}\n")
+            metrics = nfield.run(config, out=os.path.join(tmp, "out"))
+            self.assertEqual([h["nu"] for h in metrics["held_out"]], [0.02, 0.04])
+            f = nfield.load(os.path.join(tmp, "out", "checkpoint.h5"))
+            self.assertEqual(f.input_dim, 3)
+            x = np.array([[0.3, 0.0, 0.02], [0.3, 0.0, 0.04], [0.3, 1.0, 0.02], [0.3, 1.0, 0.04]])
+            u = f.values(x)
+            # t = 0: the hard initial value whatever nu; t = 1: the network reads the column.
+            self.assertAlmostEqual(u[0, 0], -np.sin(np.pi * 0.3), places=12)
+            self.assertAlmostEqual(u[1, 0], -np.sin(np.pi * 0.3), places=12)
+            self.assertNotEqual(u[2, 0], u[3, 0])
+            with self.assertRaises(ValueError):
+                f.values(x[:, :2])
+
     def test_divergence_raises_with_the_metrics(self):
         with tempfile.TemporaryDirectory() as out:
             with self.assertRaisesRegex(nfield.DivergedError, r"^diverged: step \d+ \(stage 1, adam\)") as raised:
