@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: MIT
 """DeepXDE's example Burgers restated in plain PyTorch: DeepXDE's figure on this machine
-(DeepXDE itself cannot be installed here), for the README's table and docs/experiments.md.
+(DeepXDE itself cannot be installed here), for the table in docs/guide.md and docs/experiments.md.
 
     bench/deepxde_burgers_torch.py BURGERS_NPZ [ADAM_STEPS [LBFGS_ITERATIONS]]
 

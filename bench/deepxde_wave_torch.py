@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: MIT
 """DeepXDE's example wave_1d restated in plain PyTorch: DeepXDE's figure on this machine
-(DeepXDE itself cannot be installed here), for the README's table and docs/experiments.md.
+(DeepXDE itself cannot be installed here), for the table in docs/guide.md and docs/experiments.md.
 
     bench/deepxde_wave_torch.py [STEPS]
 

@@ -112,7 +112,7 @@ class EikonalResidual final : public Residual {
   // out the curvature ΔT₀ = (d − 1)/(v₀ |x − x₀|) of the analytic factor, the concave form keeps
   // it (near x₀ it makes Δu > 0, which the form drops). See the header.
   // ∇T₀ is formed here again rather than taken from gradient(): the two round differently in
-  // the last bit, and the two-layer accuracy run is that sensitive (README, Accuracy).
+  // the last bit, and the two-layer accuracy run is that sensitive (docs/results.md, Accuracy).
   double viscous_laplacian(Eigen::Index index, Eigen::Index row, double t0,
                            const StreamLayout& layout, const Streams<double>& out) const {
     const double lap = out.stream(layout.op(0))(row, 0);
