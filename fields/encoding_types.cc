@@ -124,14 +124,30 @@ class FourierType final : public EncodingTypeOf<FourierType> {
   void validate(const EncodingOptions& o) const override {
     if (o.features < 1) reject("features", std::to_string(o.features), "must be >= 1");
     if (!(o.scale > 0)) reject("scale", std::to_string(o.scale), "must be > 0");
+    for (std::size_t g = 0; g < o.scales.size(); ++g)
+      for (double v : o.scales[g])
+        if (!(v > 0)) reject("scales[" + std::to_string(g) + "]", std::to_string(v), "every σ must be > 0");
   }
-  // The 2π of Fourier features is folded into B.
+  void validate_inputs(const EncodingOptions& o, int input_dim) const override {
+    for (std::size_t g = 0; g < o.scales.size(); ++g) {
+      const auto n = static_cast<int>(o.scales[g].size());
+      if (n != 1 && n != input_dim)
+        reject("scales[" + std::to_string(g) + "]", std::to_string(n) + " values",
+               "needs one σ for every axis or one per axis (" + std::to_string(input_dim) + ")");
+    }
+  }
+  // The 2π of Fourier features is folded into B. Draws row by row, so that one block at
+  // `scale` is the matrix it always was.
   Eigen::MatrixXd matrix(const EncodingOptions& o, int input_dim) const override {
     std::mt19937_64 rng(o.seed);
-    Eigen::MatrixXd b(o.features, input_dim);
+    const std::vector<std::vector<double>> scales =
+        o.scales.empty() ? std::vector<std::vector<double>>{{o.scale}} : o.scales;
+    Eigen::MatrixXd b(o.features * static_cast<Eigen::Index>(scales.size()), input_dim);
     for (Eigen::Index r = 0; r < b.rows(); ++r)
-      for (Eigen::Index c = 0; c < b.cols(); ++c)
-        b(r, c) = 2.0 * std::numbers::pi * o.scale * normal(rng);
+      for (Eigen::Index c = 0; c < b.cols(); ++c) {
+        const std::vector<double>& block = scales[static_cast<std::size_t>(r / o.features)];
+        b(r, c) = 2.0 * std::numbers::pi * block[block.size() == 1 ? 0 : static_cast<std::size_t>(c)] * normal(rng);
+      }
     return b;
   }
   template <typename Scalar>
@@ -143,13 +159,59 @@ class FourierType final : public EncodingTypeOf<FourierType> {
     if (e.has("features")) o.features = e.get_in_range("features", 1, 65536);
     o.scale = e.get_or("scale", o.scale);
     e.require("scale", o.scale > 0, "expected a number > 0");
+    if (e.has("scales")) {
+      e.require("scales", e.has_list("scales") && e.child("scales").size() > 0,
+                "expected a list of scales, each a number or a list of one σ per axis");
+      if (e.has("scale")) throw e.error("scales", "give scale or scales, not both");
+      const io::ConfigNode list = e.child("scales");
+      o.scales.clear();
+      for (std::size_t g = 0; g < list.size(); ++g) {
+        const io::ConfigNode item = list.at(g);
+        std::vector<double> block = item.is_sequence() ? item.as<std::vector<double>>()
+                                                       : std::vector<double>{item.as<double>()};
+        item.require(!block.empty() && std::all_of(block.begin(), block.end(), [](double v) { return v > 0; }),
+                     "expected σ > 0, a number or one per axis");
+        o.scales.push_back(std::move(block));
+      }
+    }
     o.seed = e.has("seed") ? static_cast<std::uint64_t>(e.get_nonnegative<std::int64_t>("seed"))
                            : context.seed;
   }
   void write(const EncodingOptions& o, const EncodingContext&, YAML::Node& n) const override {
     n["features"] = o.features;
-    n["scale"] = o.scale;
+    if (o.scales.empty()) n["scale"] = o.scale;
+    for (const std::vector<double>& block : o.scales) {
+      YAML::Node item;
+      for (double v : block) item.push_back(v);
+      item.SetStyle(YAML::EmitterStyle::Flow);
+      n["scales"].push_back(item);
+    }
     n["seed"] = o.seed;
+  }
+  // The blocks as one list of σ and the count of each.
+  void save(io::H5Writer& file, const std::string& group, const EncodingOptions& o) const override {
+    if (o.scales.empty()) return;
+    std::vector<double> values;
+    std::vector<std::int64_t> sizes;
+    for (const std::vector<double>& block : o.scales) {
+      values.insert(values.end(), block.begin(), block.end());
+      sizes.push_back(static_cast<std::int64_t>(block.size()));
+    }
+    file.write_attribute(group, "encoding_scales", std::span<const double>(values));
+    file.write_attribute(group, "encoding_scales_sizes", std::span<const std::int64_t>(sizes));
+  }
+  void load(const io::H5Reader& file, const std::string& group, EncodingOptions& o) const override {
+    o.scales.clear();
+    if (!file.has_attribute(group, "encoding_scales")) return;
+    const auto values = file.read_attribute<std::vector<double>>(group, "encoding_scales");
+    const auto sizes = file.read_attribute<std::vector<std::int64_t>>(group, "encoding_scales_sizes");
+    std::size_t at = 0;
+    for (std::int64_t n : sizes) {
+      if (n < 1 || at + static_cast<std::size_t>(n) > values.size())
+        throw io::H5Error(file.path().string() + ": " + group + ": encoding_scales_sizes does not match encoding_scales");
+      o.scales.emplace_back(values.begin() + static_cast<std::ptrdiff_t>(at), values.begin() + static_cast<std::ptrdiff_t>(at + n));
+      at += static_cast<std::size_t>(n);
+    }
   }
 };
 

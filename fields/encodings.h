@@ -4,7 +4,11 @@
 // function, so it reuses the elementwise stream rules of autodiff/elementwise.h:
 //
 //   positional  γ(x) = [x, sin(B x), cos(B x)], B = rows 2ˡ π eᵢ, l < L (NeRF; Mildenhall 2020)
-//   fourier     γ(x) = [sin(2π B x), cos(2π B x)], B ~ N(0, σ²), m × d (Tancik et al. 2020)
+//   fourier     γ(x) = [sin(2π B x), cos(2π B x)], B ~ N(0, σ²), m × d (Tancik et al. 2020);
+//               with `scales`, B stacks one m × d block per scale, column a of block g drawn
+//               N(0, σ_ga²): several scales, and a different one per axis (x slow, t fast:
+//               the closest to DeepXDE's spatio-temporal multi-scale Fourier features, whose
+//               x and t features go through the network apart and are multiplied after it)
 //   cusp        γ(x) = [x, |x_a − c₁|, …, |x_a − c_k|] for planes x_a = c_k
 //   identity    γ(x) = x (no module)
 //   hash_grid   trainable multiresolution grids (Müller et al. 2022), fields/hash_grid.h
@@ -58,6 +62,9 @@ struct EncodingOptions {
   bool normalize = false;         // positional: octave l scaled by 2⁻ˡ (derivatives bounded)
   int features = 128;             // fourier: m
   double scale = 10.0;            // fourier: σ
+  // fourier: one block of `features` rows per entry, σ per axis (one value: every axis);
+  // empty: one block at `scale`
+  std::vector<std::vector<double>> scales;
   std::uint64_t seed = 0;         // fourier: draws B
   int axis = 0;                   // cusp: the input a normal to the planes
   std::vector<double> at;         // cusp: the planes x_a = c, at least one

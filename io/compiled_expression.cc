@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <numbers>
 #include <stdexcept>
@@ -330,6 +332,121 @@ void apply_aliases(Parser& parser, int index, int root, const ExpressionScope& s
   for (const auto& [term, sign] : terms) apply_aliases(parser, term, root, scope);
 }
 
+// The value of a subtree that reads no slot; nullopt when it reads one.
+std::optional<double> constant_value(const std::vector<Node>& nodes, int index) {
+  const Node& node = nodes[static_cast<std::size_t>(index)];
+  if (node.op == Op::kConst) return node.value;
+  if (node.op == Op::kSlot) return std::nullopt;
+  const std::optional<double> a = constant_value(nodes, node.children[0]);
+  if (!a) return std::nullopt;
+  const std::optional<double> b = node.children.size() > 1 ? constant_value(nodes, node.children[1]) : a;
+  if (!b) return std::nullopt;
+  return CompiledExpression::apply<double>({node.op, 0, node.children.size() > 1 ? 1 : -1, 0, 0}, *a, *b);
+}
+
+// A term c·name (through *, / by a constant and unary −) as (symbol, c); nullopt otherwise.
+std::optional<std::pair<int, double>> linear_term(const std::vector<Node>& nodes, int index) {
+  const Node& node = nodes[static_cast<std::size_t>(index)];
+  std::optional<std::pair<int, double>> inner;
+  double factor = 1;
+  if (node.op == Op::kSlot) return node.symbol >= 0 ? std::optional(std::pair{node.symbol, 1.0}) : std::nullopt;
+  if (node.op == Op::kNeg) {
+    inner = linear_term(nodes, node.children[0]);
+    factor = -1;
+  } else if (node.op == Op::kAdd || node.op == Op::kSub) {  // x ± 0, what an alias leaves
+    const std::optional<double> left = constant_value(nodes, node.children[0]);
+    const std::optional<double> right = constant_value(nodes, node.children[1]);
+    if (right == 0.0) inner = linear_term(nodes, node.children[0]);
+    else if (left == 0.0) inner = linear_term(nodes, node.children[1]);
+    factor = left == 0.0 && node.op == Op::kSub ? -1 : 1;
+  } else if (node.op == Op::kMul || node.op == Op::kDiv) {
+    const std::optional<double> right = constant_value(nodes, node.children[1]);
+    if (right) {
+      inner = linear_term(nodes, node.children[0]);
+      factor = node.op == Op::kMul ? *right : 1.0 / *right;
+    } else if (node.op == Op::kMul) {
+      const std::optional<double> left = constant_value(nodes, node.children[0]);
+      if (left) inner = linear_term(nodes, node.children[1]);
+      factor = left.value_or(0);
+    }
+  }
+  if (!inner) return std::nullopt;
+  return std::pair{inner->first, inner->second * factor};
+}
+
+// "u_tt - 4*u_xx": the name of a folded sum, for symbols() and messages.
+std::string folded_name(const std::vector<std::pair<std::string, double>>& terms) {
+  std::string out;
+  for (const auto& [name, c] : terms) {
+    const double magnitude = std::abs(c);
+    out += out.empty() ? (c < 0 ? "-" : "") : (c < 0 ? " - " : " + ");
+    if (magnitude != 1) {
+      char buffer[32];
+      std::snprintf(buffer, sizeof buffer, "%.17g*", magnitude);
+      out += buffer;
+    }
+    out += name;
+  }
+  return out;
+}
+
+// Folds the groups of one chain's terms (see ExpressionScope::fold); `uses`: each symbol's
+// reads in the whole expression.
+void fold_chain(Parser& parser, const std::vector<std::pair<int, int>>& terms, const std::vector<int>& uses,
+                const ExpressionScope& scope) {
+  std::vector<Node>& nodes = parser.nodes();
+  std::vector<std::string> groups;
+  std::vector<std::vector<std::pair<int, double>>> members;  // per group: (term node, signed coefficient)
+  for (const auto& [index, sign] : terms) {
+    const std::optional<std::pair<int, double>> term = linear_term(nodes, index);
+    if (!term || uses[static_cast<std::size_t>(term->first)] != 1 || !std::isfinite(term->second) || term->second == 0)
+      continue;
+    const std::optional<std::string> group = scope.fold_group(parser.symbols()[static_cast<std::size_t>(term->first)].name);
+    if (!group) continue;
+    const auto at = std::find(groups.begin(), groups.end(), *group);
+    if (at == groups.end()) {
+      groups.push_back(*group);
+      members.emplace_back();
+    }
+    members[static_cast<std::size_t>(std::find(groups.begin(), groups.end(), *group) - groups.begin())].emplace_back(
+        index, sign * term->second);
+  }
+  for (const auto& group : members) {
+    if (group.size() < 2) continue;
+    // The first term's place keeps its chain sign s: the folded name reads s · Σ sign_i c_i name_i.
+    const int first_chain_sign = std::find_if(terms.begin(), terms.end(), [&](const std::pair<int, int>& t) {
+                                   return t.first == group[0].first;
+                                 })->second;
+    std::vector<std::pair<std::string, double>> weighted;
+    for (const auto& [index, c] : group)
+      weighted.emplace_back(parser.symbols()[static_cast<std::size_t>(linear_term(nodes, index)->first)].name,
+                            c * first_chain_sign);
+    const std::optional<int> slot = scope.fold(weighted);
+    if (!slot) continue;
+    const int first_symbol = linear_term(nodes, group[0].first)->first;
+    const std::size_t position = parser.symbols()[static_cast<std::size_t>(first_symbol)].position;
+    const int replacement = parser.slot_node(folded_name(weighted), *slot, position);
+    nodes[static_cast<std::size_t>(group[0].first)] = nodes[static_cast<std::size_t>(replacement)];
+    for (std::size_t k = 1; k < group.size(); ++k)
+      nodes[static_cast<std::size_t>(group[k].first)] = Node{Op::kConst, {}, 0.0};
+  }
+}
+
+// Folds every chain of + and − below `index` (`root`: the whole expression).
+void apply_folds(Parser& parser, int index, int root, const ExpressionScope& scope) {
+  const Node node = parser.nodes()[static_cast<std::size_t>(index)];
+  if (node.op != Op::kAdd && node.op != Op::kSub) {
+    for (int child : node.children) apply_folds(parser, child, root, scope);
+    return;
+  }
+  std::vector<std::pair<int, int>> terms;
+  flatten(parser.nodes(), index, 1, terms);
+  std::vector<int> uses(parser.symbols().size(), 0);
+  count_uses(parser.nodes(), root, uses);
+  fold_chain(parser, terms, uses, scope);
+  for (const auto& [term, sign] : terms) apply_folds(parser, term, root, scope);
+}
+
 // Emits the tree below `node` onto the tape, folding constant subtrees; returns the register
 // holding its value.
 class Compiler {
@@ -389,6 +506,7 @@ CompiledExpression::CompiledExpression(std::string text, const ExpressionScope& 
   Parser parser(text_, scope);
   const int root = parser.parse();
   if (!scope.sum_aliases.empty()) apply_aliases(parser, root, root, scope);
+  if (scope.fold_group && scope.fold) apply_folds(parser, root, root, scope);
   Compiler compiler(parser.nodes());
   compiler.emit(root);
   tape_ = compiler.take();

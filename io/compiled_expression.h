@@ -78,6 +78,14 @@ struct ExpressionScope {
   // the alias's name (resolved as any name) with that sign: `2 - (u_xx + u_yy)` reads
   // lap(u), `u_xx + u_yy + u_xx*u` or `u_xx - u_yy` stays as written.
   std::vector<SumAlias> sum_aliases;
+  // Constant-coefficient sums read as one name: where a chain of + and − (after the aliases)
+  // has two or more terms `c·name` (c a constant subtree: `c^2*u_xx`, `u_xx/4`, `-u_tt`) whose
+  // names `fold_group` puts in one group, each read nowhere else and each c finite and
+  // nonzero, they become one read of the slot `fold` gives for their (name, signed
+  // coefficient) list: u_tt − c²u_xx as one weighted second-derivative stream. The first
+  // term's place reads the new name; the others read 0. Either callback unset: no folding.
+  std::function<std::optional<std::string>(std::string_view name)> fold_group;
+  std::function<std::optional<int>(const std::vector<std::pair<std::string, double>>& terms)> fold;
 };
 
 // One name an expression reads through a slot, in order of first appearance.

@@ -15,8 +15,11 @@ out=${1:-out/gallery}
 nfield=${NFIELD:-build/bin/nfield}
 mkdir -p "$out" docs/images
 for config in lid_driven_cavity allen_cahn_1d sdf_bunny nerf_bunny_hash_grid autoint_cos; do
+  extra=()
+  # u(x, t) as a picture needs more frames than the config writes (one row each).
+  [[ $config == allen_cahn_1d ]] && extra=(--set output.frames=192)
   # shellcheck disable=SC2086
-  "$nfield" run "configs/$config.yaml" --out "$out/$config" ${NFIELD_ARGS:-}
+  "$nfield" run "configs/$config.yaml" --out "$out/$config" "${extra[@]}" ${NFIELD_ARGS:-}
 done
 "${PYTHON:-python3}" scripts/render_mesh.py "$out/sdf_bunny/surface.ply" "$out/sdf_bunny/surface.png" --size 384
 "${PYTHON:-python3}" scripts/compose_gallery.py "$out" docs/images

@@ -511,16 +511,20 @@ class Pde final : public Problem {
     const int d = domain_.input_dim();
     // Unknown constants resolve to slots d + kUnknownSlots + i until renumbered.
     constexpr int kUnknownSlots = 1 << 16;
+    const auto slot_of = [&candidates, d](const DerivativeSymbol& symbol) {
+      auto at = std::find(candidates.begin(), candidates.end(), symbol);
+      if (at == candidates.end()) at = candidates.insert(candidates.end(), symbol);
+      return d + static_cast<int>(at - candidates.begin());
+    };
     s.resolve = [&](std::string_view name) -> std::optional<int> {
       if (unknowns_ && unknowns_->index(std::string(name)) >= 0)
         return d + kUnknownSlots + unknowns_->index(std::string(name));
       const auto symbol = parse_derivative_symbol(name, outputs_, domain_.input_names(), domain_.space_dim());
       if (!symbol) return std::nullopt;
-      auto at = std::find(candidates.begin(), candidates.end(), *symbol);
-      if (at == candidates.end()) at = candidates.insert(candidates.end(), *symbol);
-      return d + static_cast<int>(at - candidates.begin());
+      return slot_of(*symbol);
     };
     s.sum_aliases = laplacian_aliases();
+    set_second_derivative_folds(s, outputs_, domain_.input_names(), domain_.space_dim(), slot_of);
     io::CompiledExpression expression;
     try {
       expression = io::CompiledExpression(text, s);

@@ -109,7 +109,8 @@ std::vector<SymbolTerm> symbol_terms(const autodiff::StreamLayout& layout, const
 
 int DerivativeSymbol::order() const {
   switch (kind) {
-    case Kind::kLaplacian: return 2;
+    case Kind::kLaplacian:
+    case Kind::kWeighted: return 2;
     case Kind::kBilaplacian: return 4;
     case Kind::kPartial: break;
   }
@@ -147,6 +148,63 @@ std::optional<DerivativeSymbol> parse_derivative_symbol(std::string_view name,
   return symbol;
 }
 
+std::optional<DerivativeSymbol> weighted_second_derivative(const std::vector<std::pair<DerivativeSymbol, double>>& terms,
+                                                           int input_dim, int space_dim) {
+  using Kind = DerivativeSymbol::Kind;
+  if (terms.empty()) return std::nullopt;
+  DerivativeSymbol out;
+  out.kind = Kind::kWeighted;
+  out.output = terms[0].first.output;
+  out.weights.assign(static_cast<std::size_t>(input_dim * input_dim), 0.0);
+  auto add = [&](int a, int b, double c) {
+    out.weights[static_cast<std::size_t>(a * input_dim + b)] += c;
+  };
+  for (const auto& [s, c] : terms) {
+    if (s.output != out.output || s.order() != 2 || s.kind == Kind::kBilaplacian) return std::nullopt;
+    if (s.kind == Kind::kLaplacian) {
+      for (int a = 0; a < space_dim; ++a) add(a, a, c);
+    } else if (s.kind == Kind::kPartial) {
+      add(s.axes[0], s.axes[1], 0.5 * c);
+      add(s.axes[1], s.axes[0], 0.5 * c);
+    } else {
+      for (std::size_t k = 0; k < out.weights.size(); ++k) out.weights[k] += c * s.weights[k];
+    }
+  }
+  return out;
+}
+
+void set_second_derivative_folds(io::ExpressionScope& scope, const std::vector<std::string>& outputs,
+                                 const std::vector<std::string>& inputs, int space_dim,
+                                 std::function<int(const DerivativeSymbol&)> slot_of) {
+  const auto second = [outputs, inputs, space_dim](std::string_view name) -> std::optional<DerivativeSymbol> {
+    try {
+      std::optional<DerivativeSymbol> s = parse_derivative_symbol(name, outputs, inputs, space_dim);
+      if (s && s->order() == 2 && (s->kind == DerivativeSymbol::Kind::kPartial || s->kind == DerivativeSymbol::Kind::kLaplacian))
+        return s;
+    } catch (const std::invalid_argument&) {
+    }
+    return std::nullopt;
+  };
+  scope.fold_group = [second, outputs](std::string_view name) -> std::optional<std::string> {
+    const std::optional<DerivativeSymbol> s = second(name);
+    if (!s) return std::nullopt;
+    return outputs[static_cast<std::size_t>(s->output)];
+  };
+  const int input_dim = static_cast<int>(inputs.size());
+  scope.fold = [second, input_dim, space_dim, slot_of = std::move(slot_of)](
+                   const std::vector<std::pair<std::string, double>>& terms) -> std::optional<int> {
+    std::vector<std::pair<DerivativeSymbol, double>> symbols;
+    for (const auto& [name, c] : terms) {
+      std::optional<DerivativeSymbol> s = second(name);
+      if (!s) return std::nullopt;
+      symbols.emplace_back(std::move(*s), c);
+    }
+    const std::optional<DerivativeSymbol> folded = weighted_second_derivative(symbols, input_dim, space_dim);
+    if (!folded) return std::nullopt;
+    return slot_of(*folded);
+  };
+}
+
 StreamPlan plan_streams(const std::vector<DerivativeSymbol>& symbols, int input_dim, int space_dim) {
   using Kind = DerivativeSymbol::Kind;
   // Tangent axes: those of first and second derivatives, and the space axes for Δ.
@@ -159,6 +217,10 @@ StreamPlan plan_streams(const std::vector<DerivativeSymbol>& symbols, int input_
       for (int a = 0; a < space_dim; ++a) need_tangent(a);
     else if (s.kind == Kind::kPartial && (s.order() == 1 || s.order() == 2))
       for (int a : s.axes) need_tangent(a);
+    else if (s.kind == Kind::kWeighted)
+      for (int a = 0; a < input_dim; ++a)
+        for (int b = 0; b < input_dim; ++b)
+          if (s.weights[static_cast<std::size_t>(a * input_dim + b)] != 0) need_tangent(a);
   }
   std::sort(tangent_axes.begin(), tangent_axes.end());
   auto tangent_of = [&](int axis) {
@@ -193,6 +255,13 @@ StreamPlan plan_streams(const std::vector<DerivativeSymbol>& symbols, int input_
       const int i = tangent_of(s.axes[0]), j = tangent_of(s.axes[1]);
       c(i, j) += 0.5;
       c(j, i) += 0.5;
+      operator_of[k] = add_operator(c);
+    } else if (s.kind == Kind::kWeighted) {
+      Eigen::MatrixXd c = Eigen::MatrixXd::Zero(t, t);
+      for (int a = 0; a < input_dim; ++a)
+        for (int b = 0; b < input_dim; ++b)
+          if (const double w = s.weights[static_cast<std::size_t>(a * input_dim + b)]; w != 0)
+            c(tangent_of(a), tangent_of(b)) = w;
       operator_of[k] = add_operator(c);
     } else if (s.order() >= 3) {
       taylor_order = std::max(taylor_order, s.order());

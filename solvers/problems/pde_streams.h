@@ -12,6 +12,13 @@
 //   lap(u)           Δu over the space axes             one operator stream, C = I (space)
 //   u_xxx, u_xxyt …  order 3 or 4                        Taylor series, see below
 //   bilap(u)         Δ²u over the space axes            Taylor series of order 4
+//   Σ c_i (u_ab | lap u)  a constant-coefficient sum     one operator stream, C = Σ c_i C_i
+//
+// The last row is no symbol a user writes: where a residual's chain of + and − has two or
+// more second derivatives of one output with constant coefficients, each read nowhere else
+// (`u_tt - c^2*u_xx`), the expression compiler folds them (io::ExpressionScope::fold) into
+// one weighted symbol, read from one operator stream tr(W ∇²u) with W = Σ c_i C_i, as the
+// built-in wave does; two streams would cost one more forward pass of the operator's size.
 //
 // Tangents are the axes some first or second derivative needs, in axis order; operator
 // streams are shared by all outputs and by every symbol with the same C (u_xx and v_xx are
@@ -35,20 +42,24 @@
 // visible in float.
 #pragma once
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "autodiff/streams.h"
+#include "io/compiled_expression.h"
 
 namespace nfield::solvers {
 
 struct DerivativeSymbol {
-  enum class Kind { kPartial, kLaplacian, kBilaplacian };
+  enum class Kind { kPartial, kLaplacian, kBilaplacian, kWeighted };
   Kind kind = Kind::kPartial;
   int output = 0;
   std::vector<int> axes;  // kPartial: the input columns differentiated, sorted; empty: the value
+  // kWeighted: the symmetric W of tr(W ∇²u) over all inputs, row-major (input_dim²)
+  std::vector<double> weights;
 
   int order() const;
   bool operator==(const DerivativeSymbol&) const = default;
@@ -64,6 +75,18 @@ std::optional<DerivativeSymbol> parse_derivative_symbol(std::string_view name,
                                                         const std::vector<std::string>& outputs,
                                                         const std::vector<std::string>& inputs,
                                                         int space_dim);
+
+// Σ c_i s_i as one kWeighted symbol, where every s_i is a second derivative (u_xx, u_xy,
+// lap(u)) of one output; nullopt otherwise (the terms stay as written).
+std::optional<DerivativeSymbol> weighted_second_derivative(const std::vector<std::pair<DerivativeSymbol, double>>& terms,
+                                                           int input_dim, int space_dim);
+
+// Sets `scope`'s fold callbacks (io::ExpressionScope::fold) for the symbols of `outputs`
+// over `inputs`: second derivatives of one output group together; `slot_of` gives the slot
+// of a symbol (the weighted one included).
+void set_second_derivative_folds(io::ExpressionScope& scope, const std::vector<std::string>& outputs,
+                                 const std::vector<std::string>& inputs, int space_dim,
+                                 std::function<int(const DerivativeSymbol&)> slot_of);
 
 // One symbol's value: Σ coefficient · out[stream][channel] over its terms.
 struct SymbolTerm {

@@ -39,6 +39,7 @@ void expect_round_trip(const FieldOptions& options, const std::string& name) {
   EXPECT_EQ(o.hidden, options.hidden);
   EXPECT_EQ(o.encoding.type, options.encoding.type);
   EXPECT_EQ(o.encoding.normalize, options.encoding.normalize);
+  EXPECT_EQ(o.encoding.scales, options.encoding.scales);
   if (options.encoding.type == "cusp") {
     EXPECT_EQ(o.encoding.axis, options.encoding.axis);
     EXPECT_EQ(o.encoding.at, options.encoding.at);
@@ -86,6 +87,13 @@ TEST(FieldIo, RoundTripIsBitExactForEveryEncodingAndPrecision) {
   normalized.encoding.type = "positional";
   normalized.encoding.normalize = true;
   expect_round_trip<double>(normalized, "positional_normalized.h5");
+  FieldOptions scales;  // Fourier features in blocks of several scales
+  scales.input_dim = 2;
+  scales.hidden = {4};
+  scales.encoding.type = "fourier";
+  scales.encoding.features = 3;
+  scales.encoding.scales = {{1.0, 2.0}, {0.5}};
+  expect_round_trip<double>(scales, "fourier_scales.h5");
 }
 
 TEST(FieldIo, H5pyReadsTheLayout) {

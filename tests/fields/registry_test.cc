@@ -120,6 +120,34 @@ TEST(EncodingOptions, ValidationNamesTheField) {
   EXPECT_NE(message_of([&] { o.validate(); }).find("only cusp features"), std::string::npos);
 }
 
+// Fourier features in blocks (`scales`): one block at σ is the matrix of `scale: σ` (the same
+// draws), each block's column a has the spread 2π σ_ga, and a block needs one σ or one per axis.
+TEST(EncodingOptions, FourierScalesStackBlocksWithOneSigmaPerAxis) {
+  EncodingOptions one;
+  one.type = "fourier";
+  one.features = 16;
+  one.scale = 3.0;
+  one.seed = 7;
+  EncodingOptions blocks = one;
+  blocks.scales = {{3.0}};
+  EXPECT_EQ(encoding_matrix(blocks, 2), encoding_matrix(one, 2));
+  blocks.features = 4000;
+  blocks.scales = {{1.0, 1.0}, {1.0, 10.0}};
+  const Eigen::MatrixXd b = encoding_matrix(blocks, 2);
+  ASSERT_EQ(b.rows(), 8000);
+  const double sigma[2][2] = {{1, 1}, {1, 10}};
+  for (int g = 0; g < 2; ++g)
+    for (int a = 0; a < 2; ++a) {
+      const Eigen::VectorXd column = b.block(g * 4000, a, 4000, 1);
+      const double spread = std::sqrt(column.squaredNorm() / 4000);
+      EXPECT_NEAR(spread / (2 * std::numbers::pi * sigma[g][a]), 1.0, 0.05) << g << " " << a;
+    }
+  blocks.scales = {{1.0, 2.0, 3.0}};
+  EXPECT_NE(message_of([&] { blocks.validate(2); }).find("encoding.scales[0] = 3 values"), std::string::npos);
+  blocks.scales = {{1.0, -2.0}};
+  EXPECT_NE(message_of([&] { blocks.validate(); }).find("encoding.scales[0]"), std::string::npos);
+}
+
 // Cusp features: [x, |x_a − c_k|] with value, sign derivative and no curvature, by hand.
 TEST(EncodingOptions, CuspFeaturesAreDistancesToThePlanes) {
   EncodingOptions o;

@@ -303,6 +303,53 @@ TEST(CompiledExpression, ResolvedNamesAndAppliedNames) {
   expect_error("grad(u)", 0, "unknown function 'grad'", scope);
 }
 
+// Constant-coefficient sums of names one group holds become one read of the slot `fold`
+// gives; the test's fold returns slot 6 and records the (name, coefficient) list, and the
+// row gives slot 6 a value of its own (9) that tells which was read. Slots: x 0, c 1
+// (a slot, so no constant), u_tt 3, u_xx 4, v_xx 5.
+TEST(CompiledExpression, FoldsConstantCoefficientSums) {
+  ExpressionScope scope;
+  scope.slots = {{"x", 0}, {"c", 1}, {"u_tt", 3}, {"u_xx", 4}, {"v_xx", 5}};
+  scope.constants = {{"k", 2.0}};
+  scope.fold_group = [](std::string_view name) -> std::optional<std::string> {
+    if (name == "u_tt" || name == "u_xx") return "u";
+    if (name == "v_xx") return "v";
+    return std::nullopt;
+  };
+  std::vector<std::pair<std::string, double>> folded;
+  scope.fold = [&folded](const std::vector<std::pair<std::string, double>>& terms) -> std::optional<int> {
+    folded = terms;
+    return 6;
+  };
+  const double row[7] = {0.5, 3, 0, 2, 3, 5, 9};
+  std::vector<double> scratch;
+  struct Folded {
+    const char* text;
+    double value;
+    std::vector<int> reads;
+    std::vector<std::pair<std::string, double>> terms;  // what fold was given; empty: not called
+  };
+  using T = std::vector<std::pair<std::string, double>>;
+  const Folded cases[] = {
+      {"u_tt - k^2*u_xx", 9, {6}, T{{"u_tt", 1}, {"u_xx", -4}}},
+      {"x - (2*u_tt + u_xx/4)", 0.5 - 9, {0, 6}, T{{"u_tt", 2}, {"u_xx", 0.25}}},
+      {"-u_tt + k*u_xx + x", -9 + 0.5, {0, 6}, T{{"u_tt", 1}, {"u_xx", -2}}},  // the first place keeps its −
+      {"u_tt - c*u_xx", 2 - 9, {1, 3, 4}, T{}},                               // c varies: no fold
+      {"u_tt - u_xx + u_xx*x", 2 - 3 + 1.5, {0, 3, 4}, T{}},                  // u_xx read twice
+      {"u_tt + v_xx", 7, {3, 5}, T{}},                                        // two groups of one
+      {"u_tt + 0*u_xx", 2, {3, 4}, T{}},                                       // a zero coefficient
+  };
+  for (const Folded& c : cases) {
+    SCOPED_TRACE(c.text);
+    folded.clear();
+    const CompiledExpression e(c.text, scope);
+    EXPECT_DOUBLE_EQ(e.evaluate<double>(row, scratch), c.value);
+    EXPECT_EQ(e.reads(), c.reads);
+    EXPECT_EQ(folded, c.terms);
+  }
+  EXPECT_EQ(CompiledExpression("u_tt - k^2*u_xx", scope).symbols()[0].name, "u_tt - 4*u_xx");
+}
+
 // u_xx + u_yy read as lap(u) where the sum is whole, of one sign, and its terms read nowhere
 // else; slots: x 0, u_xx 3, u_yy 4, lap(u) 5.
 TEST(CompiledExpression, SumAliases) {
