@@ -205,9 +205,12 @@ void set_second_derivative_folds(io::ExpressionScope& scope, const std::vector<s
   };
 }
 
-StreamPlan plan_streams(const std::vector<DerivativeSymbol>& symbols, int input_dim, int space_dim) {
+namespace {
+
+// The tangent axes the symbols need, in order: those of first and second derivatives, the
+// space axes for Δ, the axes a weighted sum of second derivatives reads.
+std::vector<int> tangent_axes_of(const std::vector<DerivativeSymbol>& symbols, int input_dim, int space_dim) {
   using Kind = DerivativeSymbol::Kind;
-  // Tangent axes: those of first and second derivatives, and the space axes for Δ.
   std::vector<int> tangent_axes;
   auto need_tangent = [&](int axis) {
     if (std::find(tangent_axes.begin(), tangent_axes.end(), axis) == tangent_axes.end()) tangent_axes.push_back(axis);
@@ -223,6 +226,14 @@ StreamPlan plan_streams(const std::vector<DerivativeSymbol>& symbols, int input_
           if (s.weights[static_cast<std::size_t>(a * input_dim + b)] != 0) need_tangent(a);
   }
   std::sort(tangent_axes.begin(), tangent_axes.end());
+  return tangent_axes;
+}
+
+}  // namespace
+
+StreamPlan plan_streams(const std::vector<DerivativeSymbol>& symbols, int input_dim, int space_dim) {
+  using Kind = DerivativeSymbol::Kind;
+  const std::vector<int> tangent_axes = tangent_axes_of(symbols, input_dim, space_dim);
   auto tangent_of = [&](int axis) {
     return static_cast<int>(std::find(tangent_axes.begin(), tangent_axes.end(), axis) - tangent_axes.begin());
   };

@@ -176,7 +176,7 @@ TEST(FieldTypeRegistry, TakenAndUnknownNames) {
     field_type("kan");
     ADD_FAILURE() << "no error";
   } catch (const UnknownNameError& e) {
-    EXPECT_EQ(std::string(e.what()), "unknown field type 'kan' (valid: bacon, mlp, nerf, shallow, siren)");
+    EXPECT_EQ(std::string(e.what()), "unknown field type 'kan' (valid: acorn, bacon, mlp, nerf, shallow, siren)");
   }
   EXPECT_EQ(default_activation("Shallow"), "softplus");
 }
