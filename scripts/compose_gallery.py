@@ -35,7 +35,7 @@ def main():
         sys.exit(__doc__)
     runs, images = pathlib.Path(sys.argv[1]), pathlib.Path(sys.argv[2])
     pictures = {
-        "gallery_cavity.png": scaled(runs / "lid_driven_cavity/solution.png"),
+        "gallery_plate.png": scaled(runs / "poisson_plate_with_holes/solution.png"),
         "gallery_allen_cahn.png": scaled(runs / "allen_cahn_1d/solution.png"),
         "gallery_sdf.png": scaled(runs / "sdf_bunny/surface.png"),
         "gallery_nerf.png": beside(scaled(runs / "nerf_bunny_hash_grid/test_views/test_000_render.png"),
