@@ -131,13 +131,71 @@ GridMetrics grid_error_at(const Problem& problem, const StreamEvaluator& evaluat
   return metrics;
 }
 
+// m with its rows outside a shaped domain set to NaN, which ParaView leaves blank.
+Eigen::MatrixXd blank_outside(Eigen::MatrixXd m, const Eigen::Array<bool, Eigen::Dynamic, 1>& inside, bool shaped) {
+  if (shaped)
+    for (Eigen::Index i = 0; i < m.rows(); ++i)
+      if (!inside(i)) m.row(i).setConstant(std::numeric_limits<double>::quiet_NaN());
+  return m;
+}
+
+// Each output u, its gradient (grad_u, from the tangent streams 1…d), |u| of a complex pair
+// and each scale's u of a multiscale field.
+void add_solution_arrays(io::PointArrays& arrays, const Eigen::MatrixXd& u, const autodiff::Streams<double>& streams,
+                         const std::vector<std::string>& names, const Eigen::Array<bool, Eigen::Dynamic, 1>& inside,
+                         bool shaped, const OutputContext* scales, const Eigen::MatrixXd& x) {
+  const int channels = static_cast<int>(u.cols()), d = streams.count - 1;
+  for (int c = 0; c < channels; ++c) {
+    arrays[names[c]] = u.col(c);
+    Eigen::MatrixXd g(u.rows(), d);
+    for (int a = 0; a < d; ++a) g.col(a) = streams.stream(1 + a).col(c);
+    arrays["grad_" + names[c]] = blank_outside(as_vtk_vector(g), inside, shaped);
+  }
+  if (channels == 2) arrays["abs_u"] = u.rowwise().norm();
+  if (scales && scales->scales > 1 && scales->scale_values)
+    for (int s = 0; s < scales->scales; ++s) {
+      const Eigen::MatrixXd us = scales->scale_values(x, s);
+      for (int c = 0; c < channels; ++c) arrays[names[c] + "_scale" + std::to_string(s)] = us.col(c);
+    }
+}
+
+// The first output on the grid as a picture: row 0 is the top (largest y); in 3-D the middle
+// z slice; outside a shaped domain (NaN) white, not the colormap's low end.
+void write_solution_png(const std::filesystem::path& path, const io::Grid& grid, const Eigen::MatrixXd& u, int d) {
+  const int nx = grid.dims[0], ny = grid.dims[1];
+  const Eigen::Index slice = d == 3 ? static_cast<Eigen::Index>(grid.dims[2] / 2) * nx * ny : 0;
+  Eigen::MatrixXd image(ny, nx);
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) image(ny - 1 - j, i) = u(slice + i + nx * j, 0);
+  io::Image picture = io::colorize(image, {std::nullopt, io::Colormap::kViridis});
+  for (int r = 0; r < ny; ++r)
+    for (int c = 0; c < nx; ++c)
+      if (!std::isfinite(image(r, c))) picture.pixels.row(r * nx + c).setOnes();
+  io::write_png(path, picture);
+}
+
+// The residual of `term` at x (rows per point); its squares inside the domain are added to
+// `sum_sq` and counted in `count`.
+Eigen::MatrixXd residual_at(const LossTerm& term, const StreamEvaluator& evaluate, const Eigen::MatrixXd& x,
+                            const Eigen::Array<bool, Eigen::Dynamic, 1>& inside, double& sum_sq, Eigen::Index& count) {
+  const autodiff::StreamLayout layout(term.spec);
+  const auto residual = term.residual(x);
+  Eigen::MatrixXd r;
+  residual->evaluate(0, layout, evaluate(layout, x), r);
+  for (Eigen::Index i = 0; i < r.rows(); ++i)
+    if (inside(i)) {
+      sum_sq += r.row(i).squaredNorm();
+      ++count;
+    }
+  return r;
+}
+
 GridMetrics write_grid_at(const Problem& problem, const StreamEvaluator& evaluate, const OutputOptions& output,
                           const OutputContext* scales, const Eigen::VectorXd& parameters) {
   const Domain& domain = problem.domain();
   const int d = domain.space_dim(), channels = problem.output_dim();
   const io::Grid grid = io::make_grid(domain.lower(), domain.upper(), output.grid);
   const Eigen::MatrixXd space = grid.points(d);
-  const Eigen::Index n = space.rows();
   const std::vector<std::string> names = problem.output_names();
   const int frames = domain.has_time() ? output.frames : 1;
 
@@ -160,41 +218,13 @@ GridMetrics write_grid_at(const Problem& problem, const StreamEvaluator& evaluat
     // = 0) and every array there is NaN, which ParaView leaves blank (threshold on `inside`).
     const Eigen::Array<bool, Eigen::Dynamic, 1> inside = domain.contains_rows(x);
     const bool shaped = domain.geometry() != nullptr;
-    const auto blank = [&](Eigen::MatrixXd m) {
-      if (shaped)
-        for (Eigen::Index i = 0; i < m.rows(); ++i)
-          if (!inside(i)) m.row(i).setConstant(std::numeric_limits<double>::quiet_NaN());
-      return m;
-    };
+    const auto blank = [&](Eigen::MatrixXd m) { return blank_outside(std::move(m), inside, shaped); };
     io::PointArrays arrays;
     if (shaped) arrays["inside"] = inside.cast<double>().matrix();
-    const autodiff::Streams<double> streams = evaluate(gradient_layout, x);
     const Eigen::MatrixXd u = blank(values_at(evaluate, domain, x));
-    for (int c = 0; c < channels; ++c) {
-      arrays[names[c]] = u.col(c);
-      Eigen::MatrixXd g(n, d);
-      for (int a = 0; a < d; ++a) g.col(a) = streams.stream(1 + a).col(c);
-      arrays["grad_" + names[c]] = blank(as_vtk_vector(g));
-    }
-    if (channels == 2) arrays["abs_u"] = u.rowwise().norm();
-    if (scales && scales->scales > 1 && scales->scale_values)
-      for (int s = 0; s < scales->scales; ++s) {
-        const Eigen::MatrixXd us = scales->scale_values(x, s);
-        for (int c = 0; c < channels; ++c) arrays[names[c] + "_scale" + std::to_string(s)] = us.col(c);
-      }
-    if (residual_index >= 0) {
-      const LossTerm& term = terms[residual_index];
-      const autodiff::StreamLayout layout(term.spec);
-      const auto residual = term.residual(x);
-      Eigen::MatrixXd r;
-      residual->evaluate(0, layout, evaluate(layout, x), r);
-      for (Eigen::Index i = 0; i < r.rows(); ++i)
-        if (inside(i)) {
-          residual_sq += r.row(i).squaredNorm();
-          ++residual_count;
-        }
-      arrays["residual"] = blank(r);
-    }
+    add_solution_arrays(arrays, u, evaluate(gradient_layout, x), names, inside, shaped, scales, x);
+    if (residual_index >= 0)
+      arrays["residual"] = blank(residual_at(terms[residual_index], evaluate, x, inside, residual_sq, residual_count));
     std::map<std::string, double, std::less<>> field_data;
     if (problem.has_exact()) {
       const Eigen::MatrixXd exact = problem.exact(x);
@@ -222,20 +252,7 @@ GridMetrics write_grid_at(const Problem& problem, const StreamEvaluator& evaluat
     } else {
       io::write_vti(output.dir / "solution.vti", grid, arrays);
     }
-    if (output.png && k == 0 && d >= 2) {
-      // Row 0 of the picture is the top (largest y); 3D: the middle z slice.
-      const int nx = grid.dims[0], ny = grid.dims[1];
-      const Eigen::Index slice = d == 3 ? static_cast<Eigen::Index>(grid.dims[2] / 2) * nx * ny : 0;
-      Eigen::MatrixXd image(ny, nx);
-      for (int j = 0; j < ny; ++j)
-        for (int i = 0; i < nx; ++i) image(ny - 1 - j, i) = u(slice + i + nx * j, 0);
-      io::Image picture = io::colorize(image, {std::nullopt, io::Colormap::kViridis});
-      // Outside a shaped domain (NaN): white, not the colormap's low end.
-      for (int r = 0; r < ny; ++r)
-        for (int c = 0; c < nx; ++c)
-          if (!std::isfinite(image(r, c))) picture.pixels.row(r * nx + c).setOnes();
-      io::write_png(output.dir / "solution.png", picture);
-    }
+    if (output.png && k == 0 && d >= 2) write_solution_png(output.dir / "solution.png", grid, u, d);
   }
   if (domain.has_time()) pvd.write();
   if (output.png && domain.has_time() && d == 1)
