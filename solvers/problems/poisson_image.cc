@@ -151,48 +151,7 @@ class PoissonImage final : public Problem {
       return x;
     };
     term.residual = [this, layout = autodiff::StreamLayout(term.spec)](const Eigen::MatrixXd& x) {
-      const Eigen::Index n = x.rows();
-      const bool gradient = supervise_ == "gradient";
-      if (energy_) {
-        Eigen::MatrixXd target(n, 2);
-        for (Eigen::Index i = 0; i < n; ++i) {
-          // q in (X, Y) = (c·hx, r·hy); y = 1 − Y points the other way.
-          const Eigen::Vector2d q = flux_field_->at(std::clamp((x(i, 0) + 1.0) / hx_, 0.0, width_ - 1.0),
-                                                    std::clamp((1.0 - x(i, 1)) / hy_, 0.0, height_ - 1.0));
-          target.row(i) << q(0), -q(1);
-        }
-        return residual_for(layout, target);
-      }
-      if (spline_) {
-        Eigen::MatrixXd target(n, gradient ? 2 : 1);
-        for (Eigen::Index i = 0; i < n; ++i) {
-          // Pixel coordinates: column c = (x + 1)/hx, row r = (1 − y)/hy, so ∂/∂y = −∂/∂r / hy.
-          const io::BSplineImage::Derivatives d =
-              spline_image_->at(std::clamp((x(i, 0) + 1.0) / hx_, 0.0, width_ - 1.0),
-                                std::clamp((1.0 - x(i, 1)) / hy_, 0.0, height_ - 1.0));
-          if (gradient)
-            target.row(i) << d.d_column / hx_, -d.d_row / hy_;
-          else
-            target(i, 0) = d.dd_column / (hx_ * hx_) + d.dd_row / (hy_ * hy_);
-        }
-        return residual_for(layout, target);
-      }
-      if (gradient) {
-        Eigen::MatrixXd target(n, 2);
-        for (Eigen::Index i = 0; i < n; ++i) {
-          const auto [r, c] = pixel(x.row(i));
-          target(i, 0) = (at(r, c + 1) - at(r, c - 1)) / (2 * hx_);
-          target(i, 1) = (at(r - 1, c) - at(r + 1, c)) / (2 * hy_);  // y points up
-        }
-        return residual_for(layout, target);
-      }
-      Eigen::MatrixXd target(n, 1);
-      for (Eigen::Index i = 0; i < n; ++i) {
-        const auto [r, c] = pixel(x.row(i));
-        target(i, 0) = (at(r, c + 1) - 2 * at(r, c) + at(r, c - 1)) / (hx_ * hx_) +
-                       (at(r + 1, c) - 2 * at(r, c) + at(r - 1, c)) / (hy_ * hy_);
-      }
-      return residual_for(layout, target);
+      return residual_for(layout, interior_target(x));
     };
     if (stream_) {
       LossTerm border;
@@ -210,8 +169,59 @@ class PoissonImage final : public Problem {
       return {term, border};
     }
     if (supervise_ == "gradient" || energy_ || !spline_ || flux_weight_ == 0) return {term};
-    // The Laplacian fixes the picture up to a harmonic function; with the flux through the
-    // border, up to a constant (the Neumann problem).
+    return {term, flux_term()};
+  }
+
+  // The interior term's target at x: the flux field of the energy form, or the picture's
+  // gradient or Laplacian, from its B-spline or by central differences at pixel centres.
+  Eigen::MatrixXd interior_target(const Eigen::MatrixXd& x) const {
+    const Eigen::Index n = x.rows();
+    const bool gradient = supervise_ == "gradient";
+    if (energy_) {
+      Eigen::MatrixXd target(n, 2);
+      for (Eigen::Index i = 0; i < n; ++i) {
+        // q in (X, Y) = (c·hx, r·hy); y = 1 − Y points the other way.
+        const Eigen::Vector2d q = flux_field_->at(std::clamp((x(i, 0) + 1.0) / hx_, 0.0, width_ - 1.0),
+                                                  std::clamp((1.0 - x(i, 1)) / hy_, 0.0, height_ - 1.0));
+        target.row(i) << q(0), -q(1);
+      }
+      return target;
+    }
+    if (spline_) {
+      Eigen::MatrixXd target(n, gradient ? 2 : 1);
+      for (Eigen::Index i = 0; i < n; ++i) {
+        // Pixel coordinates: column c = (x + 1)/hx, row r = (1 − y)/hy, so ∂/∂y = −∂/∂r / hy.
+        const io::BSplineImage::Derivatives d =
+            spline_image_->at(std::clamp((x(i, 0) + 1.0) / hx_, 0.0, width_ - 1.0),
+                              std::clamp((1.0 - x(i, 1)) / hy_, 0.0, height_ - 1.0));
+        if (gradient)
+          target.row(i) << d.d_column / hx_, -d.d_row / hy_;
+        else
+          target(i, 0) = d.dd_column / (hx_ * hx_) + d.dd_row / (hy_ * hy_);
+      }
+      return target;
+    }
+    if (gradient) {
+      Eigen::MatrixXd target(n, 2);
+      for (Eigen::Index i = 0; i < n; ++i) {
+        const auto [r, c] = pixel(x.row(i));
+        target(i, 0) = (at(r, c + 1) - at(r, c - 1)) / (2 * hx_);
+        target(i, 1) = (at(r - 1, c) - at(r + 1, c)) / (2 * hy_);  // y points up
+      }
+      return target;
+    }
+    Eigen::MatrixXd target(n, 1);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const auto [r, c] = pixel(x.row(i));
+      target(i, 0) = (at(r, c + 1) - 2 * at(r, c) + at(r, c - 1)) / (hx_ * hx_) +
+                     (at(r + 1, c) - 2 * at(r, c) + at(r - 1, c)) / (hy_ * hy_);
+    }
+    return target;
+  }
+
+  // The Laplacian fixes the picture up to a harmonic function; with the flux through the
+  // border, up to a constant (the Neumann problem): the flux term.
+  LossTerm flux_term() const {
     LossTerm flux;
     flux.name = "flux";
     flux.batch_key = "boundary";
@@ -234,7 +244,7 @@ class PoissonImage final : public Problem {
       return std::make_unique<LinearResidual>(
           std::vector<LinearResidual::Term>{{0, layout.tangent(0), 0, nx}, {0, layout.tangent(1), 0, ny}}, target);
     };
-    return {term, flux};
+    return flux;
   }
 
   void write_outputs(const OutputContext& context,
