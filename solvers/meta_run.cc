@@ -15,6 +15,7 @@
 #include "fields/field_io.h"
 #include "io/atomic_write.h"
 #include "io/version.h"
+#include "solvers/conditions/field_solution.h"
 #include "solvers/training/optimizers.h"
 #include "solvers/training/progress_printer.h"
 #include "solvers/training/reptile.h"
@@ -107,11 +108,16 @@ class HeldOutEvaluation {
   }
 
  private:
+  // A family's instances have no hard conditions: the solution is the network itself.
   OutputContext context(const fs::path& dir) const {
-    const fields::Field<Scalar>& field = field_;
-    return OutputContext{dir,
-                         [&field](const Eigen::MatrixXd& x) { return field.values(x.cast<Scalar>()).template cast<double>().eval(); },
-                         setup_.output.grid, {}, std::numeric_limits<Scalar>::epsilon()};
+    const Solution solution = make_solution(field_, nullptr);
+    OutputContext context;
+    context.dir = dir;
+    context.values = solution.values;
+    context.streams = solution.streams;
+    context.grid = setup_.output.grid;
+    context.epsilon = std::numeric_limits<Scalar>::epsilon();
+    return context;
   }
 
   void write_snapshot(const Problem& problem, const fs::path& dir) const {
