@@ -8,7 +8,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "solvers/run.h"
+#include "solvers/run/run.h"
 
 namespace nfield::apps {
 

@@ -9,7 +9,7 @@
 
 #include "io/atomic_write.h"
 #include "io/config.h"
-#include "solvers/run.h"
+#include "solvers/run/run.h"
 
 namespace nfield::apps {
 namespace {

@@ -24,8 +24,8 @@
 #include "integrators/volume_rendering.h"
 #include "solvers/training/adam.h"
 #include "solvers/training/optimizers.h"
-#include "solvers/run.h"
-#include "solvers/training/sampler.h"
+#include "solvers/run/run.h"
+#include "solvers/sampling/random.h"
 
 namespace nfield::apps {
 namespace {

@@ -11,7 +11,7 @@
 
 #include "apps/gemm_rate.h"
 #include "fields/field.h"
-#include "solvers/run.h"
+#include "solvers/run/run.h"
 #include "solvers/training/trainer.h"
 
 namespace nfield::apps {

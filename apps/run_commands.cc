@@ -6,7 +6,7 @@
 #include <memory>
 
 #include "io/hdf5_file.h"
-#include "solvers/run.h"
+#include "solvers/run/run.h"
 
 namespace nfield::apps {
 namespace {

@@ -27,7 +27,7 @@ class StreamResidual {
                         const Matrix<Scalar>& r_bar, Streams<Scalar>& adjoint) const = 0;
 
   // Trainable numbers the residual reads besides the field's outputs (an inverse problem's
-  // unknown constants, solvers/unknowns.h): how many (q, 0 for most residuals), and
+  // unknown constants, solvers/core/unknowns.h): how many (q, 0 for most residuals), and
   // ∂r/∂c for the block's rows of r, (rows · components()) × q, row n·C + c for r_c of
   // row n. Called like evaluate, from several threads at once.
   virtual int extra_parameters() const { return 0; }

@@ -28,7 +28,7 @@
 #include <string>
 #include <vector>
 
-#include "solvers/run.h"
+#include "solvers/run/run.h"
 #include "solvers/training/trainer.h"
 
 namespace {

@@ -33,7 +33,7 @@ class Field {
   int output_dim() const { return options_.output_dim; }
   // θ as the optimizers see it: the network's parameters, then extra_parameters() trainable
   // numbers the network does not read (an inverse problem's unknown constants,
-  // solvers/unknowns.h). The passes below read only the network's part; their gradient leaves
+  // solvers/core/unknowns.h). The passes below read only the network's part; their gradient leaves
   // the extra entries as they are and their Jacobian rows have zeros there, for the caller to
   // fill. Checkpoints of the field (fields/field_io.h) keep the network's part only.
   Eigen::Index parameter_count() const { return network_.parameter_count() + extra_; }

@@ -35,7 +35,7 @@ FieldOptions field_options_from_config(const io::ConfigNode& node, int input_dim
     o.encoding.type = e.get_choice("type", encoding_names(), o.encoding.type);
     encoding_type(o.encoding.type).read(e, {input_dim, o.seed, std::move(input_names)}, o.encoding);
     e.reject_unknown_keys();
-    // Means and variances: the problem appends the variances (solvers/run.cc checks it can).
+    // Means and variances: the problem appends the variances (solvers/run/run.cc checks it can).
     if (reads_variances(o.encoding)) o.input_dim += type.variance_inputs(o);
   }
   node.reject_unknown_keys();

@@ -33,8 +33,8 @@
 #include "io/config.h"
 #include "io/hdf5_file.h"
 #include "io/version.h"
-#include "solvers/conditions/field_solution.h"
-#include "solvers/run.h"
+#include "solvers/core/solution.h"
+#include "solvers/run/run.h"
 
 namespace py = pybind11;
 

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: MIT
-"""The guide's picture (docs/guide.md) of a meta-learning run (solvers/meta_run.h): for each held-out picture
+"""The guide's picture (docs/guide.md) of a meta-learning run (solvers/run/meta_run.h): for each held-out picture
 (rows), the picture itself, then its fit after 0, K and C steps from the learned
 initialisation and after 0, K and C steps from the standard one, and the standard one at the
 step where it first matches the learned one's K-step figure; and beside it the mean held-out

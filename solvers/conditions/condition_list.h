@@ -46,7 +46,7 @@
 
 #include "io/config.h"
 #include "io/expression.h"
-#include "solvers/domain.h"
+#include "solvers/core/domain.h"
 #include "solvers/geometry/geometry.h"
 
 namespace nfield::solvers {

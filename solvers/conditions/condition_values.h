@@ -11,7 +11,7 @@
 
 #include "io/config.h"
 #include "io/expression.h"
-#include "solvers/domain.h"
+#include "solvers/core/domain.h"
 
 namespace nfield::solvers {
 

@@ -21,7 +21,7 @@
 #include <vector>
 
 #include "solvers/conditions/condition_list.h"
-#include "solvers/residual.h"
+#include "solvers/core/residual.h"
 
 namespace nfield::solvers {
 

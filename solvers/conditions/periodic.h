@@ -14,7 +14,7 @@
 #include <memory>
 #include <vector>
 
-#include "solvers/residual.h"
+#include "solvers/core/residual.h"
 
 namespace nfield::solvers {
 

@@ -18,7 +18,7 @@
 // image under the map) and kept when inside: the kept points are uniform in Ω. Each candidate
 // uses d coordinates of the engine; candidates come in batches, and a batch's surplus is
 // dropped, so the number of draws per call varies with the acceptance rate (|Ω| / |box|).
-// With a sobol or halton sequence attached (solvers/training/sampler.h) the candidates are
+// With a sobol or halton sequence attached (solvers/sampling/random.h) the candidates are
 // consecutive sequence points, and the accepted ones are the sequence restricted to Ω: a
 // deterministic function of the seed and the counts drawn (checkpoints stay exact), and as
 // even as the sequence's discrepancy over the sets {box ∩ Ω} allows, which for a curved
@@ -69,7 +69,7 @@
 
 #include "io/expression.h"
 #include "solvers/geometry/primitive.h"
-#include "solvers/training/sampler.h"
+#include "solvers/sampling/random.h"
 
 namespace nfield::solvers::geometry {
 

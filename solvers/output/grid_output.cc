@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 #include "solvers/output/grid_output.h"
-#include "solvers/problem_capabilities.h"
+#include "solvers/core/problem_capabilities.h"
 
 #include <algorithm>
 #include <cmath>

@@ -4,7 +4,7 @@
 // solution and the error, as VTK image files (one per time frame, gathered in a .pvd), a PNG
 // preview and the error metrics.
 //
-// A parametric field (solvers/domain.h, parameters) is written at each of the problem's
+// A parametric field (solvers/core/domain.h, parameters) is written at each of the problem's
 // held-out parameter values (Problem::held_out_parameters), each into its own folder of the
 // output directory (held_out_nu_0.01/solution.pvd, …), each with its errors against its own
 // reference; the GridMetrics then report the worst of them (rel_l2, max_abs_err, per output)
@@ -19,7 +19,7 @@
 
 #include "autodiff/streams.h"
 #include "solvers/output/output_options.h"
-#include "solvers/problem.h"
+#include "solvers/core/problem.h"
 
 namespace nfield::solvers {
 

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 //
-// The `output:` section of a config (read by load_run, solvers/run.h; used by the grid
+// The `output:` section of a config (read by load_run, solvers/run/run.h; used by the grid
 // outputs, solvers/output/grid_output.h):
 //
 //   output:

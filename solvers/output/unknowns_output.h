@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 //
-// What a run reports of its unknown constants (solvers/unknowns.h):
+// What a run reports of its unknown constants (solvers/core/unknowns.h):
 //
 //   metrics.json   unknowns: {nu: {value, initial, true, rel_error, trajectory: [[step, value], …]}}
 //                  (true and rel_error = |value − true| / |true| where the config gives the
@@ -17,7 +17,7 @@
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
-#include "solvers/unknowns.h"
+#include "solvers/core/unknowns.h"
 
 namespace nfield::solvers {
 

@@ -21,7 +21,7 @@
 // Pitfalls: u(x, 0) is periodic in value (−1 at both ends) but not in slope (u_x = ∓2 at
 // x = ±1): a kink that the diffusion smooths only over √(εt) ≈ 0.01, so the spectrum decays
 // slowly at first: N = 1024 and 2048 differ by up to 4e-4 next to x = ±1 before t ≈ 0.1,
-// by 2e-6 after t = 0.3 and 2e-9 at t = 1 (tests/solvers/allen_cahn_reference_test.cc). The fronts that form are √(2ε/ρ) ≈ 6e-3 wide: N = 512 puts two or three nodes
+// by 2e-6 after t = 0.3 and 2e-9 at t = 1 (tests/solvers/problems/allen_cahn_reference_test.cc). The fronts that form are √(2ε/ρ) ≈ 6e-3 wide: N = 512 puts two or three nodes
 // across one; the default 1024 puts five.
 //
 // Between the kept snapshots the solution is the Fourier interpolant in x (exact for the

@@ -72,7 +72,7 @@
 #include "autodiff/sequential.h"
 #include "integrators/ray_sampling.h"
 #include "integrators/volume_rendering.h"
-#include "solvers/problem_capabilities.h"
+#include "solvers/core/problem_capabilities.h"
 #include "solvers/problems/problems.h"
 #include "solvers/problems/radiance_scene.h"
 #include "solvers/problems/section_sampler.h"

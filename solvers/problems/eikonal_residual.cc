@@ -12,7 +12,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "solvers/jet_residual.h"
+#include "solvers/core/jet_residual.h"
 
 namespace nfield::solvers {
 namespace {

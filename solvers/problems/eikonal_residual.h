@@ -1,13 +1,13 @@
 // SPDX-License-Identifier: MIT
 //
 // The residuals of the eikonal problem (eikonal.cc, whose header explains each term),
-// written once through JetResidual (solvers/jet_residual.h); here so that the tests can
+// written once through JetResidual (solvers/core/jet_residual.h); here so that the tests can
 // build every form on points and per-point data of their own.
 #pragma once
 
 #include <memory>
 
-#include "solvers/residual.h"
+#include "solvers/core/residual.h"
 
 namespace nfield::solvers {
 

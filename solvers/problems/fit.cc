@@ -61,7 +61,7 @@
 #include "io/line_plot.h"
 #include "io/png_image.h"
 #include "io/text.h"
-#include "solvers/problem_capabilities.h"
+#include "solvers/core/problem_capabilities.h"
 #include "solvers/problems/image_family.h"
 #include "solvers/problems/problems.h"
 

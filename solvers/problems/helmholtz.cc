@@ -93,7 +93,7 @@
 
 #include "solvers/conditions/condition_values.h"
 #include "solvers/conditions/conditions.h"
-#include "solvers/problem_capabilities.h"
+#include "solvers/core/problem_capabilities.h"
 #include "solvers/problems/problems.h"
 
 namespace nfield::solvers {

@@ -82,7 +82,7 @@
 #include "io/vtk_image.h"
 #include "io/vtk_polydata.h"
 #include "io/png_image.h"
-#include "solvers/problem_capabilities.h"
+#include "solvers/core/problem_capabilities.h"
 #include "solvers/problems/problems.h"
 #include "solvers/problems/radiance_scene.h"
 

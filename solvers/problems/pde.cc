@@ -40,7 +40,7 @@
 // later constants and the conditions' values and coefficients. One no expression reads is an
 // error (a typo, as an unknown key is).
 //
-// Inverse problems (solvers/unknowns.h, solvers/problems/pde_data.h): a constant given as
+// Inverse problems (solvers/core/unknowns.h, solvers/problems/pde_data.h): a constant given as
 //   nu: {unknown: true, initial: 0.05, positive: true, true: 0.00318, lr: 1.0e-3}
 // (or bounds: [a, b]) is trained with the field; only residuals (of the equation and of
 // `type: residual` conditions) read it, as a slot whose current value is filled in at every
@@ -49,7 +49,7 @@
 // Unknown fields (`unknown_fields: {a: {true: EXPR}}`, solvers/problems/pde_unknown_fields.h)
 // are extra outputs of the field after `outputs`, read by residuals as the outputs are.
 // Parametric fields (issue 28): `nu: {range: [a, b], sampling: uniform | log}` is an input
-// column of the domain (solvers/domain.h, parameters), read by name as x or t are; not with
+// column of the domain (solvers/core/domain.h, parameters), read by name as x or t are; not with
 // `unknown`; `reference.held_out` lists the values outputs are evaluated at.
 // Limits: a residual reads at most 32 symbols; hard conditions (enforce: hard) take no
 // residual of order above 2.

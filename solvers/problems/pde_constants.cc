@@ -10,7 +10,7 @@
 namespace nfield::solvers {
 
 // `name: {range: [lower, upper], sampling: uniform | log}`: a parameter column of the field
-// (solvers/domain.h, DomainParameter); expressions read it as they read x or t.
+// (solvers/core/domain.h, DomainParameter); expressions read it as they read x or t.
 DomainParameter read_parameter(const io::ConfigNode& node, const std::string& name) {
   if (node.has("unknown"))
     throw node.error("unknown", "'" + name + "' is declared as a range (a field input) and as unknown; "
@@ -29,7 +29,7 @@ DomainParameter read_parameter(const io::ConfigNode& node, const std::string& na
   return p;
 }
 
-// `name: {unknown: true, initial, positive | bounds, true, lr}` (solvers/unknowns.h).
+// `name: {unknown: true, initial, positive | bounds, true, lr}` (solvers/core/unknowns.h).
 UnknownConstant read_unknown_constant(const io::ConfigNode& node, const std::string& name) {
   if (!node.get_or("unknown", false)) {
     if (node.has("true"))

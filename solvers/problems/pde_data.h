@@ -2,7 +2,7 @@
 //
 // The `data:` section of `problem: pde`: measurements of the solution, fitted by one loss
 // term `data` beside the residuals (an inverse problem's evidence: with unknown constants,
-// solvers/unknowns.h, the term pins the field to the measured solution and the residuals then
+// solvers/core/unknowns.h, the term pins the field to the measured solution and the residuals then
 // tell the constants).
 //
 //   data:
@@ -38,9 +38,9 @@
 #include <vector>
 
 #include "io/config.h"
-#include "solvers/domain.h"
+#include "solvers/core/domain.h"
 #include "solvers/problems/pde_reference.h"
-#include "solvers/residual.h"
+#include "solvers/core/residual.h"
 
 namespace nfield::solvers {
 

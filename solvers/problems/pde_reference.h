@@ -43,7 +43,7 @@
 //
 // Metrics.json: with an expression or a named solution, the output grid's rel_l2 and
 // max_abs_err over all outputs and, with several outputs, per output (rel_l2_u,
-// max_abs_err_u, …; solvers/run.cc), and exact_*/error_* arrays in the grid files; with
+// max_abs_err_u, …; solvers/run/run.cc), and exact_*/error_* arrays in the grid files; with
 // files, the same keys at the files' points (per output: at the points of the files that
 // have it; over all outputs: every value given), and reference_points (the rows of all
 // files; a COMSOL row counts once per time), no grid arrays. The rel_l2 after each training
@@ -59,7 +59,7 @@
 
 #include "io/compiled_expression.h"
 #include "io/config.h"
-#include "solvers/domain.h"
+#include "solvers/core/domain.h"
 #include "solvers/problems/allen_cahn_reference.h"
 #include "solvers/problems/burgers_reference.h"
 

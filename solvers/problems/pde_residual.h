@@ -16,14 +16,14 @@
 //              adjoint[stream_kj][channel_kj] += c_kj · r̄ₙ · ∂r/∂s_k:
 //              the contract of Residual::backward, with no adjoint written by hand.
 //
-// Unknown constants (solvers/unknowns.h) the expression reads are slots d + N + j after the
+// Unknown constants (solvers/core/unknowns.h) the expression reads are slots d + N + j after the
 // symbols, filled with their current values at every evaluation (no re-parsing); their
 // Jacobian ∂r/∂c (extra_jacobian) is one more Jet pass with the constants seeded as the duals
 // and the symbols held constant.
 //
 // N is known only when the config is read, so M is the smallest of 1, 2, 4, 8, 16, 32 at
 // least N (a few unused dual slots cost nothing next to the network); a residual may read at
-// most kMaxExpressionReads symbols. As in solvers/jet_residual.h, what Jet calls a derivative
+// most kMaxExpressionReads symbols. As in solvers/core/jet_residual.h, what Jet calls a derivative
 // at a kink (abs at 0, min/max at a tie, sqrt at 0) is the branch taken or an infinity.
 #pragma once
 
@@ -32,8 +32,8 @@
 
 #include "io/compiled_expression.h"
 #include "solvers/problems/pde_streams.h"
-#include "solvers/residual.h"
-#include "solvers/unknowns.h"
+#include "solvers/core/residual.h"
+#include "solvers/core/unknowns.h"
 
 namespace nfield::solvers {
 

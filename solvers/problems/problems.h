@@ -5,7 +5,7 @@
 #pragma once
 
 #include "io/registry.h"
-#include "solvers/problem.h"
+#include "solvers/core/problem.h"
 
 namespace nfield::solvers {
 

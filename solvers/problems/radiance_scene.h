@@ -23,7 +23,7 @@
 #include "integrators/ray_batch.h"
 #include "integrators/ray_sampling.h"
 #include "integrators/scene_box.h"
-#include "solvers/problem.h"
+#include "solvers/core/problem.h"
 
 namespace nfield::solvers {
 

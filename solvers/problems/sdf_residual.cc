@@ -8,7 +8,7 @@
 #include <array>
 #include <cmath>
 
-#include "solvers/jet_residual.h"
+#include "solvers/core/jet_residual.h"
 
 namespace nfield::solvers {
 namespace {

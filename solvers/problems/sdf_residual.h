@@ -1,13 +1,13 @@
 // SPDX-License-Identifier: MIT
 //
 // The residuals of the sdf problem (sdf.cc, whose header explains them), written once
-// through JetResidual (solvers/jet_residual.h); here so that the tests can build them on
+// through JetResidual (solvers/core/jet_residual.h); here so that the tests can build them on
 // data of their own.
 #pragma once
 
 #include <memory>
 
-#include "solvers/residual.h"
+#include "solvers/core/residual.h"
 
 namespace nfield::solvers {
 

@@ -41,7 +41,7 @@
 #include "fields/field.h"
 #include "integrators/ray_sampling.h"
 #include "io/config.h"
-#include "solvers/problem.h"
+#include "solvers/core/problem.h"
 #include "solvers/problems/radiance_scene.h"
 #include "solvers/training/adam.h"
 

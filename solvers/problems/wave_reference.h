@@ -41,7 +41,7 @@
 #include <Eigen/Core>
 
 #include "io/expression.h"
-#include "solvers/domain.h"
+#include "solvers/core/domain.h"
 
 namespace nfield::solvers {
 

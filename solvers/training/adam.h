@@ -34,7 +34,7 @@ class Adam {
   void step(Scalar* params, const Scalar* gradient) { step(params, gradient, options_.learning_rate); }
 
   // Parameter i steps at learning_rate · scale (an unknown constant's own `lr`,
-  // solvers/unknowns.h); the others at learning_rate. Not state: set from the config.
+  // solvers/core/unknowns.h); the others at learning_rate. Not state: set from the config.
   void set_rate_scale(Eigen::Index i, double scale) {
     for (auto& entry : rate_scales_)
       if (entry.first == i) return void(entry.second = scale);

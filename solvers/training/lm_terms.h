@@ -32,7 +32,7 @@
 #include <vector>
 
 #include "fields/field.h"
-#include "solvers/residual.h"
+#include "solvers/core/residual.h"
 #include "solvers/training/communicator.h"
 #include "solvers/training/levenberg_marquardt.h"
 #include "solvers/training/trained_unknowns.h"

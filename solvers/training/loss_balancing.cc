@@ -5,7 +5,7 @@
 #include <cmath>
 #include <numeric>
 
-#include "solvers/problem.h"
+#include "solvers/core/problem.h"
 
 namespace nfield::solvers {
 

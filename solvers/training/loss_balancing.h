@@ -6,7 +6,7 @@
 // them are adaptive_refinement.h, gradient_balancing.h and causal_weighting.h
 // (training_strategy.h):
 //
-//   sampler: uniform          # uniform | sobol | halton (solvers/training/sampler.h)
+//   sampler: uniform          # uniform | sobol | halton (solvers/sampling/random.h)
 //
 //   adaptive:                 # residual-based adaptive refinement (RAR); absent: off
 //     every: 500              # steps between refinements (Adam and L-BFGS)

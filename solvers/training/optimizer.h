@@ -27,7 +27,7 @@
 #include "fields/field.h"
 #include "io/config.h"
 #include "io/hdf5_file.h"
-#include "solvers/residual.h"
+#include "solvers/core/residual.h"
 #include "solvers/training/communicator.h"
 
 namespace nfield::solvers {

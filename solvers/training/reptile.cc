@@ -9,7 +9,7 @@
 #include <stdexcept>
 
 #include "solvers/training/adam.h"
-#include "solvers/training/sampler.h"
+#include "solvers/sampling/random.h"
 #include "solvers/training/trainer.h"
 
 namespace nfield::solvers {

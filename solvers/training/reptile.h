@@ -30,7 +30,7 @@
 // that favour points from which the tasks' gradients agree, where a few steps go far on every
 // task (Nichol et al. Sec. 5). On a family of constant signals c_k and a field that can be
 // any constant, the fixed point for K = 1 is the field equal to the mean of the c_k (the
-// minimiser of the mean of (u − c_k)²): tests/solvers/reptile_test.cc checks that.
+// minimiser of the mean of (u − c_k)²): tests/solvers/training/reptile_test.cc checks that.
 //
 // The inner steps run through the existing machinery: one Trainer per draw on that instance
 // (its points drawn once, by the seed of the draw; all of a picture's pixels when the batch
@@ -47,7 +47,7 @@
 // itself (before adaptation), the rate in outer steps per second and the ETA. A loss or
 // gradient that is not finite stops the run with an error naming the outer step and the
 // instance.
-// The meta run's driver (outputs, checkpoint, held-out curves) is solvers/meta_run.h.
+// The meta run's driver (outputs, checkpoint, held-out curves) is solvers/run/meta_run.h.
 #pragma once
 
 #include <cstdint>
@@ -57,8 +57,8 @@
 
 #include "fields/field.h"
 #include "solvers/training/meta_options.h"
-#include "solvers/problem.h"
-#include "solvers/problem_capabilities.h"
+#include "solvers/core/problem.h"
+#include "solvers/core/problem_capabilities.h"
 
 namespace nfield::solvers {
 

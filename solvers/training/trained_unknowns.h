@@ -1,13 +1,13 @@
 // SPDX-License-Identifier: MIT
 //
-// The trainer's side of an inverse problem's unknown constants (solvers/unknowns.h): the
+// The trainer's side of an inverse problem's unknown constants (solvers/core/unknowns.h): the
 // raw values ρ ride at the tail of the field's θ, so every optimizer steps them; this class
 // keeps the problem's UnknownConstants in step with the θ being evaluated and adds their
 // gradient to θ's tail:
 //
 //   before a pass at θ      set_raw(θ tail): the residuals read c = g(ρ) while they run;
 //   after it                ∂L/∂ρᵢ = (Σ over the blocks of r̄ · ∂r/∂cᵢ) · g'(ρᵢ), the block
-//                           sums gathered by ExtraGradient in block order (solvers/residual.h)
+//                           sums gathered by ExtraGradient in block order (solvers/core/residual.h)
 //                           and added into the gradient's tail before the ranks' allreduce,
 //                           so MPI sums them with the field's gradient.
 //
@@ -25,8 +25,8 @@
 
 #include "fields/field.h"
 #include "io/hdf5_file.h"
-#include "solvers/residual.h"
-#include "solvers/unknowns.h"
+#include "solvers/core/residual.h"
+#include "solvers/core/unknowns.h"
 
 namespace nfield::solvers {
 

@@ -8,7 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "solvers/conditions/hard_constraints.h"
+#include "solvers/core/ansatz.h"
 #include "solvers/training/adaptive_refinement.h"
 #include "solvers/training/block_allocation.h"
 #include "solvers/training/causal_weighting.h"

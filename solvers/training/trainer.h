@@ -17,7 +17,7 @@
 // checkpoint ends with the same parameters, bit for bit, as one never interrupted.
 // (An L-BFGS or LM stage restarts its history, and draws new points, when resumed.)
 //
-// training.sampler (solvers/training/sampler.h) hooks in here: each term draws through its own
+// training.sampler (solvers/sampling/random.h) hooks in here: each term draws through its own
 // quasi-random sequence, whose counts are part of save_state. What some runs do to the loss
 // or to its points (training.adaptive, balance, causal) are training strategies
 // (solvers/training/training_strategy.h), made from the options and called at fixed moments
@@ -52,7 +52,7 @@
 #include "solvers/training/communicator.h"
 #include "solvers/training/loss_balancing.h"
 #include "solvers/training/optimizer.h"
-#include "solvers/problem.h"
+#include "solvers/core/problem.h"
 #include "solvers/training/training_options.h"
 #include "solvers/training/trained_unknowns.h"
 #include "solvers/training/training_strategy.h"
@@ -118,7 +118,7 @@ class Trainer {
     std::function<void(const std::string&)> notice;
     // Before each draw of new points, with the steps done and the trainer's engine: where a
     // problem that samples where the field is updates what its draws read
-    // (SamplesWithSolution, solvers/problem_capabilities.h). Every rank's run needs it.
+    // (SamplesWithSolution, solvers/core/problem_capabilities.h). Every rank's run needs it.
     std::function<void(long step, Random& rng)> before_draw;
   };
 

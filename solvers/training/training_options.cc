@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "solvers/training/training_options.h"
 
-#include "solvers/training/sampler.h"
+#include "solvers/sampling/random.h"
 
 namespace nfield::solvers {
 namespace {

@@ -80,7 +80,7 @@ struct TrainingOptions {
   std::string on_divergence = "stop";
   int divergence_retries = 3;
   std::vector<StageOptions> stages{StageOptions{}};
-  // Sampling and loss balancing: see solvers/training/sampler.h and solvers/loss_balancing.h.
+  // Sampling and loss balancing: see solvers/sampling/random.h and solvers/loss_balancing.h.
   std::string sampler = "uniform";
   AdaptiveOptions adaptive;
   BalanceOptions balance;

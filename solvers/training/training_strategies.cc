@@ -3,7 +3,7 @@
 // is one more `if` here, in hook order.
 #include <stdexcept>
 
-#include "solvers/problem.h"
+#include "solvers/core/problem.h"
 #include "solvers/training/adaptive_refinement.h"
 #include "solvers/training/causal_weighting.h"
 #include "solvers/training/gradient_balancing.h"

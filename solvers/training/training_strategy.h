@@ -43,7 +43,7 @@
 
 #include "autodiff/streams.h"
 #include "io/hdf5_file.h"
-#include "solvers/residual.h"
+#include "solvers/core/residual.h"
 
 namespace nfield::solvers {
 
@@ -52,7 +52,7 @@ class Problem;
 struct TrainingOptions;
 
 // The trainer as a strategy sees it, valid during a hook. An interface, so that a test can
-// run a strategy on terms of its own (tests/solvers/training_strategy_test.cc).
+// run a strategy on terms of its own (tests/solvers/training/training_strategy_test.cc).
 template <typename Scalar>
 class StrategyView {
  public:

@@ -22,7 +22,7 @@ function(step what)
 endfunction()
 
 set(installed include/nfield/fields/field.h include/nfield/autodiff/streams.h
-    include/nfield/solvers/run.h include/nfield/io/config.h bin/nfield
+    include/nfield/solvers/run/run.h include/nfield/io/config.h bin/nfield
     lib/cmake/nfield/nfieldConfig.cmake lib/cmake/nfield/nfieldConfigVersion.cmake)
 if(SHARED_CACHE)
   set(library ${work}/library)

@@ -11,7 +11,7 @@
 #include <string>
 
 #include "io/config.h"
-#include "solvers/run.h"
+#include "solvers/run/run.h"
 
 namespace nfield::testutil {
 

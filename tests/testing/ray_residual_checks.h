@@ -9,7 +9,7 @@
 
 #include <random>
 
-#include "solvers/residual.h"
+#include "solvers/core/residual.h"
 
 namespace nfield::testutil {
 

@@ -1,0 +1,321 @@
+// SPDX-License-Identifier: MIT
+#include "solvers/run/meta_run.h"
+#include "solvers/core/problem_capabilities.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <fstream>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+
+#include "fields/field_io.h"
+#include "io/atomic_write.h"
+#include "io/version.h"
+#include "solvers/core/solution.h"
+#include "solvers/training/optimizers.h"
+#include "solvers/training/progress_printer.h"
+#include "solvers/training/reptile.h"
+
+namespace nfield::solvers {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::atomic<int> g_meta_signal{0};
+extern "C" void on_meta_signal(int signal) { g_meta_signal.store(signal); }
+
+// Ctrl-C and SIGTERM end the outer loop cleanly; a second Ctrl-C kills as usual.
+class MetaSignalGuard {
+ public:
+  MetaSignalGuard() {
+    g_meta_signal.store(0);
+    struct sigaction action {};
+    action.sa_handler = on_meta_signal;
+    action.sa_flags = SA_RESETHAND;
+    sigemptyset(&action.sa_mask);
+    sigaction(SIGINT, &action, &old_int_);
+    sigaction(SIGTERM, &action, &old_term_);
+  }
+  ~MetaSignalGuard() {
+    sigaction(SIGINT, &old_int_, nullptr);
+    sigaction(SIGTERM, &old_term_, nullptr);
+  }
+
+ private:
+  struct sigaction old_int_ {}, old_term_ {};
+};
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+}
+
+std::string stem_of(const std::string& name) { return fs::path(name).stem().string(); }
+
+// A held-out instance's curves: the figure after each step (index 0: before any).
+struct HeldOutCurves {
+  std::string name, figure;
+  std::vector<double> meta, standard;
+  long steps_to_match = -1;  // the standard curve's first step at or above meta[inner_steps]
+};
+
+template <typename Scalar>
+class HeldOutEvaluation {
+ public:
+  HeldOutEvaluation(const RunSetup& setup, fields::Field<Scalar>& field, const fs::path& dir)
+      : setup_(setup), field_(field), dir_(dir) {}
+
+  // The curves of `instance` from θ_meta and from θ_standard; writes its snapshots.
+  HeldOutCurves run(const ProblemInstance& instance, const autodiff::Vector<Scalar>& meta_theta,
+                    const autodiff::Vector<Scalar>& standard_theta, std::uint64_t seed) {
+    const MetaOptions& meta = setup_.training.meta;
+    const StageOptions& stage = setup_.training.stages.front();
+    const Problem& problem = *instance.problem;
+    HeldOutCurves c;
+    c.name = instance.name;
+    const fs::path folder = dir_ / "held_out" / stem_of(instance.name);
+    const int last = std::max(meta.curve_steps, meta.inner_steps);
+    const auto record = [&](std::vector<double>& curve, const std::string& label, int step, bool snapshot) {
+      const auto* reports = capability<ReportsProgress>(problem);
+      const auto figures = reports ? reports->progress_metrics(context(folder / (label + "_" + std::to_string(step))), {})
+                                   : std::vector<std::pair<std::string, double>>{};
+      if (figures.empty()) throw std::runtime_error("held-out instance " + instance.name + " reports no figure");
+      c.figure = figures.front().first;
+      curve.push_back(figures.front().second);
+      if (snapshot) write_snapshot(problem, folder / (label + "_" + std::to_string(step)));
+    };
+    const auto snapshot_at = [&](int step) { return step == 0 || step == meta.inner_steps || step == meta.curve_steps; };
+    field_.parameters() = meta_theta;
+    record(c.meta, "meta", 0, true);
+    adapt(problem, field_, setup_.training, meta.inner_optimizer, meta.inner_lr, last, seed,
+          [&](int s) { record(c.meta, "meta", s, snapshot_at(s)); });
+    field_.parameters() = standard_theta;
+    record(c.standard, "standard", 0, true);
+    const double lr = stage.options<AdamStageOptions>().lr;
+    const double target = c.meta[static_cast<std::size_t>(meta.inner_steps)];
+    adapt(problem, field_, setup_.training, "adam", lr, stage.steps, seed, [&](int s) {
+      record(c.standard, "standard", s, snapshot_at(s));
+      if (c.steps_to_match < 0 && c.standard.back() >= target) {
+        c.steps_to_match = s;
+        write_snapshot(problem, folder / "standard_match");
+      }
+    });
+    return c;
+  }
+
+ private:
+  // A family's instances have no hard conditions: the solution is the network itself.
+  OutputContext context(const fs::path& dir) const {
+    const Solution solution = make_solution(field_, nullptr);
+    OutputContext context;
+    context.dir = dir;
+    context.values = solution.values;
+    context.streams = solution.streams;
+    context.grid = setup_.output.grid;
+    context.epsilon = std::numeric_limits<Scalar>::epsilon();
+    return context;
+  }
+
+  void write_snapshot(const Problem& problem, const fs::path& dir) const {
+    fs::create_directories(dir);
+    std::vector<std::pair<std::string, double>> ignored;
+    problem.write_outputs(context(dir), ignored);
+  }
+
+  const RunSetup& setup_;
+  fields::Field<Scalar>& field_;
+  fs::path dir_;
+};
+
+void write_curves(const fs::path& path, const std::vector<HeldOutCurves>& curves) {
+  io::write_atomically(path, [&](const fs::path& p) {
+    std::ofstream out(p);
+    out << "step";
+    for (const auto& c : curves) out << ",meta_" << stem_of(c.name) << ",standard_" << stem_of(c.name);
+    out << ",meta_mean,standard_mean\n";
+    std::size_t rows = 0;
+    for (const auto& c : curves) rows = std::max({rows, c.meta.size(), c.standard.size()});
+    const auto cell = [](const std::vector<double>& v, std::size_t i) {
+      return i < v.size() ? std::to_string(v[i]) : std::string();
+    };
+    for (std::size_t i = 0; i < rows; ++i) {
+      out << i;
+      double meta = 0, standard = 0;
+      bool meta_all = true, standard_all = true;
+      for (const auto& c : curves) {
+        out << "," << cell(c.meta, i) << "," << cell(c.standard, i);
+        meta_all = meta_all && i < c.meta.size();
+        standard_all = standard_all && i < c.standard.size();
+        if (i < c.meta.size()) meta += c.meta[i];
+        if (i < c.standard.size()) standard += c.standard[i];
+      }
+      const auto n = static_cast<double>(curves.size());
+      out << "," << (meta_all ? std::to_string(meta / n) : "") << ","
+          << (standard_all ? std::to_string(standard / n) : "") << "\n";
+    }
+  });
+}
+
+// The held-out summaries of metrics.json.
+void summarise(nlohmann::ordered_json& metrics, const std::vector<HeldOutCurves>& curves, const MetaOptions& meta,
+               int baseline_steps) {
+  if (curves.empty()) return;
+  const std::string figure = curves.front().figure;
+  metrics["held_out_figure"] = figure;
+  for (int s : {0, meta.inner_steps, meta.curve_steps}) {
+    double m = 0, st = 0;
+    for (const auto& c : curves) {
+      m += c.meta[static_cast<std::size_t>(s)];
+      st += c.standard[static_cast<std::size_t>(std::min<std::size_t>(s, c.standard.size() - 1))];
+    }
+    metrics["held_out_meta_step" + std::to_string(s)] = m / static_cast<double>(curves.size());
+    metrics["held_out_standard_step" + std::to_string(s)] = st / static_cast<double>(curves.size());
+  }
+  std::vector<double> ratios;
+  bool all_matched = true;
+  for (const auto& c : curves) {
+    all_matched = all_matched && c.steps_to_match > 0;
+    const double steps = c.steps_to_match > 0 ? static_cast<double>(c.steps_to_match) : baseline_steps;
+    ratios.push_back(steps / meta.inner_steps);
+  }
+  if (all_matched)
+    metrics["speedup"] = median(ratios);
+  else
+    metrics["speedup_at_least"] = median(ratios);
+  nlohmann::ordered_json list = nlohmann::ordered_json::array();
+  for (const auto& c : curves) {
+    nlohmann::ordered_json item;
+    item["name"] = c.name;
+    item["meta"] = c.meta;
+    item["standard_steps_to_match"] = c.steps_to_match > 0 ? nlohmann::ordered_json(c.steps_to_match) : nullptr;
+    item["standard_final"] = c.standard.back();
+    list.push_back(item);
+  }
+  metrics["held_out"] = list;
+}
+
+void write_meta_checkpoint(const fs::path& path, const auto& field, const RunSetup& setup,
+                           const std::string& config_text) {
+  io::H5Writer file(path);
+  fields::save_field(file, field);
+  file.write_attribute("/", "config", config_text);
+  file.write_attribute("/", "config_dir", fs::absolute(setup.data_dir).lexically_normal().string());
+  file.write_attribute("/", "nfield_version", std::string(version()));
+  file.write_attribute("/", "meta_algorithm", setup.training.meta.algorithm);
+  file.commit();
+}
+
+template <typename Scalar>
+int meta_train_and_write(RunSetup& setup) {
+  const MetaOptions& meta = setup.training.meta;
+  const fs::path dir = setup.output.dir;
+  const std::string config_text = io::to_yaml(setup.resolved);
+  const std::vector<ProblemInstance> tasks = instances(*setup.problem, false);
+  const std::vector<ProblemInstance> held_out = instances(*setup.problem, true);
+  fields::Field<Scalar> field(setup.field);
+  if (setup.init.parameters.size() > 0)
+    field.parameters().head(setup.init.parameters.size()) = setup.init.parameters.cast<Scalar>();
+  const autodiff::Vector<Scalar> standard = field.parameters();
+  fs::create_directories(dir);
+  io::write_atomically(dir / "config.yaml", [&](const fs::path& p) { std::ofstream(p) << config_text << "\n"; });
+  std::printf("meta-learning (%s) over %zu training instances, %zu held out: %d outer steps of %d draws x %d %s steps\n",
+              meta.algorithm.c_str(), tasks.size(), held_out.size(), meta.steps, meta.tasks_per_step,
+              meta.inner_steps, meta.inner_optimizer.c_str());
+  const auto started = std::chrono::steady_clock::now();
+  ReptileResult result;
+  {
+    MetaSignalGuard guard;
+    ProgressPrinterOptions printing;
+    printing.log_every = setup.training.log_every;
+    printing.terminal = setup.live_progress;
+    ProgressPrinter printer(printing);
+    ReptileCallbacks callbacks;
+    callbacks.stop_requested = [] { return g_meta_signal.load() != 0; };
+    callbacks.progress = [&printer](const Progress& p) { printer.step(p); };
+    result = run_reptile(tasks, field, setup.training, meta, callbacks);
+    printer.finish();
+  }
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  if (!result.finished) std::printf("\ninterrupted at outer step %ld: writing the initialisation reached\n", result.steps);
+  write_meta_checkpoint(dir / "checkpoint.h5", field, setup, config_text);
+  const autodiff::Vector<Scalar> learned = field.parameters();
+
+  nlohmann::ordered_json metrics;
+  metrics["problem"] = setup.root.get<std::string>("problem");
+  metrics["finished"] = result.finished;
+  metrics["meta_algorithm"] = meta.algorithm;
+  metrics["meta_steps"] = result.steps;
+  metrics["training_instances"] = tasks.size();
+  metrics["held_out_instances"] = held_out.size();
+  metrics["wall_s"] = wall;
+  metrics["mean_inner_loss_before"] = result.mean_first_loss;
+  metrics["mean_inner_loss_last"] = result.mean_last_loss;
+  metrics["precision"] = setup.training.precision;
+  metrics["parameters"] = field.parameter_count();
+  if (result.finished && !held_out.empty()) {
+    std::printf("held-out curves: %d %s steps from the learned initialisation, %d adam steps from the standard one\n",
+                std::max(meta.curve_steps, meta.inner_steps), meta.inner_optimizer.c_str(),
+                setup.training.stages.front().steps);
+    HeldOutEvaluation<Scalar> evaluation(setup, field, dir);
+    std::vector<HeldOutCurves> curves;
+    for (std::size_t k = 0; k < held_out.size(); ++k) {
+      curves.push_back(evaluation.run(held_out[k], learned, standard, setup.training.seed + 7919 * (k + 1)));
+      const HeldOutCurves& c = curves.back();
+      std::printf("  %s: %s %.2f -> %.2f after %d steps (learned); standard %.2f -> %.2f after %zu, matches at %s\n",
+                  c.name.c_str(), c.figure.c_str(), c.meta.front(), c.meta[static_cast<std::size_t>(meta.inner_steps)],
+                  meta.inner_steps, c.standard.front(), c.standard.back(), c.standard.size() - 1,
+                  c.steps_to_match > 0 ? ("step " + std::to_string(c.steps_to_match)).c_str() : "no step");
+    }
+    field.parameters() = learned;
+    write_curves(dir / "held_out_curve.csv", curves);
+    summarise(metrics, curves, meta, setup.training.stages.front().steps);
+    if (metrics.contains("speedup"))
+      std::printf("speedup (median standard steps to match / inner_steps): %.1fx\n", metrics["speedup"].get<double>());
+    else
+      std::printf("speedup at least %.1fx (some baselines never matched)\n", metrics["speedup_at_least"].get<double>());
+  }
+  metrics["nfield_version"] = std::string(version());
+  io::write_atomically(dir / "metrics.json", [&](const fs::path& p) { std::ofstream(p) << metrics.dump(2) << "\n"; });
+  std::printf("wrote %s (%ld outer steps, %.1f s)\n", dir.string().c_str(), result.steps, wall);
+  return result.finished ? 0 : 130;
+}
+
+}  // namespace
+
+void check_meta(const RunSetup& s) {
+  const io::ConfigNode training = s.root.child_or_empty("training");
+  const bool family = !instances(*s.problem, false).empty();
+  if (!s.training.meta.enabled) {
+    if (family)
+      throw s.root.child("equation").error(
+          "family", "a family of instances is trained by training.meta (solvers/training/reptile.h); add "
+                    "training.meta, or fit one signal with equation.path");
+    return;
+  }
+  const io::ConfigNode meta = training.child("meta");
+  if (!family)
+    throw meta.error("problem '" + s.root.get<std::string>("problem") +
+                     "' has no family of instances (problem: fit with equation.family has)");
+  const StageOptions& stage = s.training.stages.front();
+  const io::ConfigNode stage_node = training.has("stages") ? training.child("stages").at(0) : training;
+  if (stage.optimizer != "adam" || stage.options<AdamStageOptions>().schedule != "constant")
+    throw stage_node.error("optimizer", "under training.meta, stages[0] is the standard initialisation's baseline "
+                                        "on the held-out instances: expected an adam stage with schedule constant");
+  if (s.training.adaptive.enabled || s.training.causal.enabled || s.training.balance.method != "fixed")
+    throw meta.error("training.meta takes no training strategy (adaptive, causal, balance): its inner steps "
+                     "are plain gradient steps");
+}
+
+int execute_meta_run(RunSetup& setup, const fs::path& resume) {
+  if (!resume.empty())
+    throw std::invalid_argument(resume.string() + ": a meta-learning run is not resumed; start it again, or "
+                                "start a fit from its checkpoint with field.init");
+  return setup.training.precision == "double" ? meta_train_and_write<double>(setup)
+                                              : meta_train_and_write<float>(setup);
+}
+
+}  // namespace nfield::solvers
