@@ -19,7 +19,7 @@
 // cannot silently sample the bounding box's faces. In a config it is `domain.geometry`
 // (solvers/geometry/geometry_config.h), read by from_config with the config's folder; the
 // conditions then name parts (condition_list.h), the hard ansatz takes φ from
-// Geometry::distance (hard_constraints.h), and the grid outputs mask the points outside.
+// Geometry::distance (ansatz.h), and the grid outputs mask the points outside.
 //
 // Parameters (a parametric field, issue 28): a constant declared as a range (`constants:
 // {nu: {range: [0.005, 0.05]}}`, solvers/problems/pde.cc) becomes one more input column,

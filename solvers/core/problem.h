@@ -75,7 +75,7 @@ class Problem {
   virtual std::vector<LossTerm> loss_terms() const = 0;
   // The loss term whose residual is written on the output grid (-1: none).
   virtual int residual_term() const { return 0; }
-  // Hard conditions: the field's output is u = A + D·N (solvers/conditions/hard_constraints.h); loss
+  // Hard conditions: the field's output is u = A + D·N (solvers/core/ansatz.h); loss
   // terms and outputs see u. Null when every condition is soft.
   virtual std::shared_ptr<const Ansatz> ansatz() const { return nullptr; }
 

@@ -3,7 +3,7 @@
 // A number that carries its first and second derivatives with respect to the (up to three)
 // space coordinates: value v, gradient g ∈ R³, Hessian H ∈ R³ˣ³. The distance functions of
 // solvers/geometry are written once over this type and so give the value, gradient and
-// Hessian that the ansatz u = A + φ·N needs (solvers/conditions/hard_constraints.h evaluates D
+// Hessian that the ansatz u = A + φ·N needs (solvers/core/ansatz.h evaluates D
 // with its first and second derivatives).
 //
 // Rules (forward mode, second order). For a unary f:

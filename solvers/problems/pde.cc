@@ -34,7 +34,7 @@
 //
 // Conditions of `type: residual` are compiled exactly as residuals with `on` are (one
 // function, compile_residual); the others become loss terms in solvers/conditions/conditions.h
-// or the ansatz of solvers/conditions/hard_constraints.h.
+// or the ansatz of solvers/core/ansatz.h.
 //
 // The constants are numbers in every expression of the config: residuals, reference.exact,
 // later constants and the conditions' values and coefficients. One no expression reads is an

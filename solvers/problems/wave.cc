@@ -19,7 +19,7 @@
 //
 // The interior residual is r = u_tt − c²Δu − f (loss term "pde"). With `enforce: hard` on
 // the Dirichlet and initial items, u = u0 + τ v0 + φ(x) ψ(τ)² N satisfies them exactly and
-// "pde" is the only loss term (solvers/conditions/hard_constraints.h).
+// "pde" is the only loss term (solvers/core/ansatz.h).
 //
 // How the second derivatives travel: a constant speed makes the wave operator one operator
 // stream tr(C ∇²u) with C = diag(−c², …, −c², 1) over the axes (x…, t), so a 1D + time

@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: MIT
 //
-// Hard conditions (solvers/conditions/hard_constraints.h): the streams of u = A + D·N against finite
-// differences of u itself, the adjoint against finite differences of a loss, exact boundary
-// and initial data, config errors, and a short Poisson run where hard beats soft.
+// Hard conditions (solvers/core/ansatz.h, read by solvers/conditions/hard_constraints.h): the
+// streams of u = A + D·N against finite differences of u itself, the adjoint against finite
+// differences of a loss, exact boundary and initial data, config errors, and a short Poisson
+// run where hard beats soft.
 #include <gtest/gtest.h>
 
 #include <cmath>

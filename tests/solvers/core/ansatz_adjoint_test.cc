@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 //
-// The hard-condition ansatz u = A + D·N (solvers/conditions/hard_constraints.h) on random
+// The hard-condition ansatz u = A + D·N (solvers/core/ansatz.h) on random
 // layouts: `apply` (the product rule in double) and `adjoint` (from the rule's bilinear
 // coefficients, read off ceres::Jet passes) against the hand-written formulas they
 // replaced, kept here as the reference; the adjoint against central differences of the
