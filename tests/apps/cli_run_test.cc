@@ -497,8 +497,9 @@ TEST(NerfBenchTest, PrintsTheFiguresTheComparisonReads) {
   EXPECT_EQ(row["rays_per_step"].get<int>(), 8);
   EXPECT_EQ(row["threads"].get<int>(), 1);
   EXPECT_EQ(row["frame_pixels"].get<int>(), 64);  // every 16th pixel of every 16th row of 128²
-  for (const char* key : {"rays_per_s", "median_step_ms", "samples_per_step", "network_ms", "rendering_ms",
-                          "share_network", "share_rendering", "mlp_gflops", "step_gflops", "gemm_gflops",
+  for (const char* key : {"rays_per_s", "median_step_ms", "anatomy_median_step_ms", "samples_per_step",
+                          "network_ms", "rendering_ms", "share_network", "share_rendering", "mlp_gflops",
+                          "step_gflops", "gemm_gflops",
                           "mlp_gemm_ratio", "fma_peak_gflops", "mlp_peak_ratio", "step_gflop", "frame_ms",
                           "frame_samples", "params"}) {
     ASSERT_TRUE(row.contains(key)) << key << " missing from " << last;
