@@ -88,22 +88,6 @@ void HashGridEncoding<Scalar>::backward_per_point(const StreamLayout& layout, co
 
 namespace {
 
-// ω_{s,v} = ȳ_s · T[row(v)] at point n of n_points and one level, for every stream s and
-// corner v: ȳ_s the adjoint of the level's features (from column `column` of stream s's row).
-template <typename Scalar>
-void corner_omega(const Streams<Scalar>& out_adjoint, Eigen::Index n, Eigen::Index n_points, Eigen::Index column,
-                  const Offsets& o, int f_count, const Scalar* table, const Cell<Scalar>& cell,
-                  Scalar* omega) {
-  for (int v = 0; v < o.corners; ++v) {
-    const Scalar* entry = table + static_cast<Eigen::Index>(cell.rows[v]) * f_count;
-    for (int s = 0; s < o.streams; ++s) {
-      Scalar sum = 0;
-      for (int f = 0; f < f_count; ++f) sum += out_adjoint.data(s * n_points + n, column + f) * entry[f];
-      omega[s * o.corners + v] = sum;
-    }
-  }
-}
-
 // Summed over corners: g_s = Σ_v ω_{s,v} ∇W_v for the `plain` streams (those before the Taylor
 // ones), H_s = Σ_v ω_{s,v} ∇²W_v for the tangent and operator streams, and
 // I_q = Σ_v ω_{q,v} ∇³W_v for the operators; ∂^α W_v = Π_j (factor j differentiated α_j times).
@@ -225,12 +209,23 @@ void HashGridEncoding<Scalar>::input_adjoint(const StreamLayout& layout, const S
   for (size_t l = 0; l < grid_.size(); ++l) {
     const Level& level = grid_[l];
     const Scalar* table = params + level.info.first_row * f_count;
-    const Eigen::Index column = input_columns() + static_cast<Eigen::Index>(l) * f_count;
     for (Eigen::Index n = 0; n < n_points; ++n) {
       const Scalar* point = inputs.data() + n * o.stride;
       Scalar* bar = adjoint.data() + n * o.stride;
       locate(level, point, cell);
-      corner_omega(out_adjoint, n, n_points, column, o, f_count, table, cell, omega.data());
+      // ω_{s,v} = ȳ_s · T[row(v)]. (Kept here: as a function of its own, the compiler fused
+      // its multiply-adds differently, and float results changed in the last bit.)
+      for (int v = 0; v < corners; ++v) {
+        const Scalar* entry = table + static_cast<Eigen::Index>(cell.rows[v]) * f_count;
+        for (int s = 0; s < streams; ++s) {
+          Scalar sum = 0;
+          for (int f = 0; f < f_count; ++f)
+            sum += out_adjoint.data(s * n_points + n,
+                                    input_columns() + static_cast<Eigen::Index>(l) * f_count + f) *
+                   entry[f];
+          omega[s * corners + v] = sum;
+        }
+      }
       derivative_sums(layout, o, cell, plain, omega.data(), grad, hess, third);
       add_plain_adjoint(layout, o, point, grad.data(), hess.data(), third.data(), bar);
       if (o.dirs > 0) taylor_adjoint(layout, o, cell, point, omega.data(), bar);
