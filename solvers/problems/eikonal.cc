@@ -35,8 +35,8 @@
 //             normal, L the domain's diagonal: every first-arrival ray starts at the source,
 //             so no wave enters the box (∂u/∂n ≥ 0) and times are ≥ 0. |∇u| = 1/v alone also
 //             holds for fields with extra "sources" outside or on the box (u decreasing towards
-//             a face, e.g. the mirror branch −u in a region), which a network finds readily;
-//             in the two-layer example (factored) it brought rel_l2 from 0.25 to 0.02.
+//             a face, e.g. the mirror branch −u in a region), which a network finds readily
+//             (the two-layer example's figures with and without the term: docs/experiments.md).
 //   "source"  (batch `source`) the source condition at x₀ itself; its n points are all x₀,
 //             so `source: 1` is enough. r = u(x₀) (plain), r = τ(x₀) (factored).
 //   "interface" (batch `interface`, only with `layers` and interface_weight > 0) points on
@@ -78,9 +78,8 @@
 // makes meeting fronts cheap to round and drops the bias of the spreading ones. It no longer
 // makes ridges dear (they go unpenalized, as without viscosity). The operator stays
 // degenerate elliptic (nonincreasing in D²u), so ε → 0 still gives the viscosity solution.
-// With cusp features and the "interface" term it ended lower than the full Laplacian on
-// average over three seeds, so configs/accuracy_eikonal_layered.yaml uses it (seed tables:
-// docs/experiments.md).
+// With cusp features and the "interface" term it ended lower than the full Laplacian, so
+// configs/accuracy_eikonal_layered.yaml uses it (seed tables: docs/experiments.md).
 //
 // The solution is a cone at x₀ (u ≈ |x − x₀|/v₀), whose kink a smooth network rounds off.
 // With `factored: true` the travel time is factored as u = T₀ (1 + τ) with the analytic
