@@ -86,6 +86,104 @@ void HashGridEncoding<Scalar>::backward_per_point(const StreamLayout& layout, co
   if (in_adjoint) input_adjoint(layout, params, in, out_adjoint, *in_adjoint);
 }
 
+namespace {
+
+// Summed over corners: g_s = Σ_v ω_{s,v} ∇W_v for the `plain` streams (those before the Taylor
+// ones), H_s = Σ_v ω_{s,v} ∇²W_v for the tangent and operator streams, and
+// I_q = Σ_v ω_{q,v} ∇³W_v for the operators; ∂^α W_v = Π_j (factor j differentiated α_j times).
+template <typename Scalar>
+void derivative_sums(const StreamLayout& layout, const Offsets& o, const Cell<Scalar>& cell, int plain,
+                     const Scalar* omega, std::vector<Scalar>& grad, std::vector<Scalar>& hess,
+                     std::vector<Scalar>& third) {
+  const int d = o.d, corners = o.corners;
+  std::fill(grad.begin(), grad.end(), Scalar(0));
+  std::fill(hess.begin(), hess.end(), Scalar(0));
+  std::fill(third.begin(), third.end(), Scalar(0));
+  for (int v = 0; v < corners; ++v) {
+    auto derivative = [&](const int* alpha) {
+      Scalar p = 1;
+      for (int j = 0; j < d; ++j) p *= factor(cell, v, j, alpha[j], o.bits);
+      return p;
+    };
+    for (int j = 0; j < d; ++j) {
+      int alpha[kMaxDim] = {0, 0, 0, 0};
+      ++alpha[j];
+      const Scalar g = derivative(alpha);
+      for (int s = 0; s < plain; ++s) grad[s * d + j] += omega[s * corners + v] * g;
+      if (plain == 1) continue;
+      for (int k = 0; k < d; ++k) {
+        ++alpha[k];
+        const Scalar h = derivative(alpha);
+        for (int s = 1; s < plain; ++s) hess[(s * d + j) * d + k] += omega[s * corners + v] * h;
+        for (int m = 0; m < d && o.operators > 0; ++m) {
+          ++alpha[m];
+          const Scalar t3 = derivative(alpha);
+          for (int q = 0; q < o.operators; ++q)
+            third[((q * d + j) * d + k) * d + m] += omega[layout.op(q) * corners + v] * t3;
+          --alpha[m];
+        }
+        --alpha[k];
+      }
+    }
+  }
+}
+
+// x̄, ā⁽ⁱ⁾ and ā^[q] of one point (`bar`, laid out as its gathered `point`) from g, H and I.
+template <typename Scalar>
+void add_plain_adjoint(const StreamLayout& layout, const Offsets& o, const Scalar* point, const Scalar* grad,
+                       const Scalar* hess, const Scalar* third, Scalar* bar) {
+  const int d = o.d;
+  // H v added to out.
+  auto add_hess = [&](int s, const Scalar* vec, Scalar scale, Scalar* out) {
+    for (int j = 0; j < d; ++j) {
+      Scalar sum = 0;
+      for (int k = 0; k < d; ++k) sum += hess[(s * d + j) * d + k] * vec[k];
+      out[j] += scale * sum;
+    }
+  };
+  for (int j = 0; j < d; ++j) bar[j] += grad[j];
+  for (int i = 0; i < o.tangents; ++i) {
+    const int s = layout.tangent(i);
+    for (int j = 0; j < d; ++j) bar[o.a + i * d + j] += grad[s * d + j];
+    add_hess(s, point + o.a + i * d, 1, bar);
+  }
+  for (int q = 0; q < o.operators; ++q) {
+    const int s = layout.op(q);
+    for (int j = 0; j < d; ++j) bar[o.b + q * d + j] += grad[s * d + j];
+    add_hess(s, point + o.b + q * d, 1, bar);
+    const Scalar* m = point + o.m + q * d * d;
+    for (int j = 0; j < d; ++j)
+      for (int k = 0; k < d; ++k)
+        for (int r = 0; r < d; ++r) bar[r] += m[j * d + k] * third[((q * d + j) * d + k) * d + r];
+    for (const autodiff::OperatorTerm& term : layout.terms(q)) {
+      const auto c = static_cast<Scalar>(term.coefficient);
+      add_hess(s, point + o.a + term.j * d, c, bar + o.a + term.i * d);
+      add_hess(s, point + o.a + term.i * d, c, bar + o.a + term.j * d);
+    }
+  }
+}
+
+// The per-point adjoints, gathered as the inputs are (Offsets), into the input streams' rows.
+template <typename Scalar>
+void scatter_adjoint(const StreamLayout& layout, const Offsets& o, const std::vector<Scalar>& adjoint,
+                     Eigen::Index n_points, Matrix<Scalar>& a) {
+  const int d = o.d;
+  for (Eigen::Index n = 0; n < n_points; ++n) {
+    const Scalar* bar = adjoint.data() + n * o.stride;
+    for (int j = 0; j < d; ++j) a(n, j) = bar[j];
+    for (int i = 0; i < o.tangents; ++i)
+      for (int j = 0; j < d; ++j) a(layout.tangent(i) * n_points + n, j) = bar[o.a + i * d + j];
+    for (int q = 0; q < o.operators; ++q)
+      for (int j = 0; j < d; ++j) a(layout.op(q) * n_points + n, j) = bar[o.b + q * d + j];
+    for (int dir = 0; dir < o.dirs; ++dir)
+      for (int k = 1; k <= o.order; ++k)
+        for (int j = 0; j < d; ++j)
+          a(layout.taylor(dir, k) * n_points + n, j) = bar[o.taylor_at(dir, k) + j];
+  }
+}
+
+}  // namespace
+
 // ∂L/∂(input streams). With ω_{s,v} = ȳ_s · T[row(v)] and, summed over corners,
 // g_s = Σ_v ω_{s,v} ∇W_v, H_s = Σ_v ω_{s,v} ∇²W_v, I_s = Σ_v ω_{s,v} ∇³W_v:
 //   x̄ = g_value + Σᵢ H_i a⁽ⁱ⁾ + Σ_q (H_q a^[q] + I_q : M_q)
@@ -115,6 +213,8 @@ void HashGridEncoding<Scalar>::input_adjoint(const StreamLayout& layout, const S
       const Scalar* point = inputs.data() + n * o.stride;
       Scalar* bar = adjoint.data() + n * o.stride;
       locate(level, point, cell);
+      // ω_{s,v} = ȳ_s · T[row(v)]. (Kept here: as a function of its own, the compiler fused
+      // its multiply-adds differently, and float results changed in the last bit.)
       for (int v = 0; v < corners; ++v) {
         const Scalar* entry = table + static_cast<Eigen::Index>(cell.rows[v]) * f_count;
         for (int s = 0; s < streams; ++s) {
@@ -126,82 +226,14 @@ void HashGridEncoding<Scalar>::input_adjoint(const StreamLayout& layout, const S
           omega[s * corners + v] = sum;
         }
       }
-      std::fill(grad.begin(), grad.end(), Scalar(0));
-      std::fill(hess.begin(), hess.end(), Scalar(0));
-      std::fill(third.begin(), third.end(), Scalar(0));
-      for (int v = 0; v < corners; ++v) {
-        // ∂^α W_v = Π_j (factor j differentiated α_j times).
-        auto derivative = [&](const int* alpha) {
-          Scalar p = 1;
-          for (int j = 0; j < d; ++j) p *= factor(cell, v, j, alpha[j], bits_);
-          return p;
-        };
-        for (int j = 0; j < d; ++j) {
-          int alpha[kMaxDim] = {0, 0, 0, 0};
-          ++alpha[j];
-          const Scalar g = derivative(alpha);
-          for (int s = 0; s < plain; ++s) grad[s * d + j] += omega[s * corners + v] * g;
-          if (plain == 1) continue;
-          for (int k = 0; k < d; ++k) {
-            ++alpha[k];
-            const Scalar h = derivative(alpha);
-            for (int s = 1; s < plain; ++s) hess[(s * d + j) * d + k] += omega[s * corners + v] * h;
-            for (int m = 0; m < d && o.operators > 0; ++m) {
-              ++alpha[m];
-              const Scalar t3 = derivative(alpha);
-              for (int q = 0; q < o.operators; ++q)
-                third[((q * d + j) * d + k) * d + m] += omega[layout.op(q) * corners + v] * t3;
-              --alpha[m];
-            }
-            --alpha[k];
-          }
-        }
-      }
-      // H v added to out.
-      auto add_hess = [&](int s, const Scalar* vec, Scalar scale, Scalar* out) {
-        for (int j = 0; j < d; ++j) {
-          Scalar sum = 0;
-          for (int k = 0; k < d; ++k) sum += hess[(s * d + j) * d + k] * vec[k];
-          out[j] += scale * sum;
-        }
-      };
-      for (int j = 0; j < d; ++j) bar[j] += grad[j];
-      for (int i = 0; i < o.tangents; ++i) {
-        const int s = layout.tangent(i);
-        for (int j = 0; j < d; ++j) bar[o.a + i * d + j] += grad[s * d + j];
-        add_hess(s, point + o.a + i * d, 1, bar);
-      }
-      for (int q = 0; q < o.operators; ++q) {
-        const int s = layout.op(q);
-        for (int j = 0; j < d; ++j) bar[o.b + q * d + j] += grad[s * d + j];
-        add_hess(s, point + o.b + q * d, 1, bar);
-        const Scalar* m = point + o.m + q * d * d;
-        for (int j = 0; j < d; ++j)
-          for (int k = 0; k < d; ++k)
-            for (int r = 0; r < d; ++r) bar[r] += m[j * d + k] * third[((q * d + j) * d + k) * d + r];
-        for (const autodiff::OperatorTerm& term : layout.terms(q)) {
-          const auto c = static_cast<Scalar>(term.coefficient);
-          add_hess(s, point + o.a + term.j * d, c, bar + o.a + term.i * d);
-          add_hess(s, point + o.a + term.i * d, c, bar + o.a + term.j * d);
-        }
-      }
+      derivative_sums(layout, o, cell, plain, omega.data(), grad, hess, third);
+      add_plain_adjoint(layout, o, point, grad.data(), hess.data(), third.data(), bar);
       if (o.dirs > 0) taylor_adjoint(layout, o, cell, point, omega.data(), bar);
     }
   }
   in_adjoint.resize(n_points, in.count, d);
   Matrix<Scalar>& a = in_adjoint.data;
-  for (Eigen::Index n = 0; n < n_points; ++n) {
-    const Scalar* bar = adjoint.data() + n * o.stride;
-    for (int j = 0; j < d; ++j) a(n, j) = bar[j];
-    for (int i = 0; i < o.tangents; ++i)
-      for (int j = 0; j < d; ++j) a(layout.tangent(i) * n_points + n, j) = bar[o.a + i * d + j];
-    for (int q = 0; q < o.operators; ++q)
-      for (int j = 0; j < d; ++j) a(layout.op(q) * n_points + n, j) = bar[o.b + q * d + j];
-    for (int dir = 0; dir < o.dirs; ++dir)
-      for (int k = 1; k <= o.order; ++k)
-        for (int j = 0; j < d; ++j)
-          a(layout.taylor(dir, k) * n_points + n, j) = bar[o.taylor_at(dir, k) + j];
-  }
+  scatter_adjoint(layout, o, adjoint, n_points, a);
   if (include_input_) a += out_adjoint.data.leftCols(d);
 }
 

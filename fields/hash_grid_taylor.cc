@@ -99,6 +99,84 @@ void HashGridEncoding<Scalar>::series(const Offsets& o, const Cell& cell, const 
   for (int k = 0; k < n; ++k) weights[k] = (k == 0 ? 1 : 0) - phi[k];
 }
 
+namespace {
+
+// w̄_{j,tap} = Σ_v W̄_v ⋆ Π_{m≠j} (corner v's factor m) along Taylor direction `dir`, with
+// W̄_v = (0, ω_{(dir,1),v}, …, ω_{(dir,K),v}) and the taps' weight series in w.weights.
+// Linear and smoothstep keep φ̄_j alone (w̄ = φ̄ for tap 1, −φ̄ for tap 0); cubic each tap's.
+template <typename Scalar>
+void weights_adjoint(const StreamLayout& layout, const Offsets& o, int dir, const Scalar* omega, bool cubic,
+                     SeriesScratch<Scalar>& w, std::vector<Scalar>& weights_bar) {
+  const int d = o.d, corners = o.corners, order = o.order, n = order + 1, taps = 1 << o.bits;
+  std::fill(weights_bar.begin(), weights_bar.end(), Scalar(0));
+  for (int v = 0; v < corners; ++v) {
+    Scalar* w_bar = w.bar;
+    w_bar[0] = 0;
+    bool any = false;
+    for (int k = 1; k <= order; ++k) {
+      w_bar[k] = omega[layout.taylor(dir, k) * corners + v];
+      any = any || w_bar[k] != 0;
+    }
+    if (!any) continue;
+    for (int j = 0; j < d; ++j) {
+      // Π_{m≠j} of corner v's factor series.
+      Scalar* others = w.products;
+      std::fill(others, others + n, Scalar(0));
+      others[0] = 1;
+      for (int m = 0; m < d; ++m) {
+        if (m == j) continue;
+        series_product(others, w.weights + (m * taps + tap(v, m, o.bits)) * n, w.tmp, n);
+        std::copy(w.tmp, w.tmp + n, others);
+      }
+      std::fill(w.bar2, w.bar2 + n, Scalar(0));
+      series_product_adjoint(w_bar, others, w.bar2, n);
+      const int k_tap = tap(v, j, o.bits);
+      if (cubic) {
+        Scalar* out = weights_bar.data() + (j * taps + k_tap) * n;
+        for (int k = 0; k < n; ++k) out[k] += w.bar2[k];
+      } else {
+        const Scalar sign = k_tap ? Scalar(1) : Scalar(-1);
+        for (int k = 0; k < n; ++k) weights_bar[j * n + k] += sign * w.bar2[k];
+      }
+    }
+  }
+}
+
+// t̄_j (into w.bar) from axis j's w̄ (`b`: one series per tap with cubic, φ̄ otherwise), through
+// the tap weights as polynomials in t_j; w.bar2 and w.tmp hold t̄² and t̄³.
+template <typename Scalar>
+void t_adjoint(const Scalar* b, const Scalar* t, const Scalar* t2, int n, bool cubic, bool smoothstep,
+               SeriesScratch<Scalar>& w) {
+  Scalar* t_bar = w.bar;
+  std::fill(t_bar, t_bar + n, Scalar(0));
+  Scalar* t2_bar = w.bar2;
+  Scalar* t3_bar = w.tmp;
+  if (cubic) {
+    // w₀ = (1 − 3t + 3t² − t³)/6, w₁ = (4 − 6t² + 3t³)/6, w₂ = (1 + 3t + 3t² − 3t³)/6,
+    // w₃ = t³/6, read off per power of t.
+    for (int k = 0; k < n; ++k) {
+      const Scalar b0 = b[k], b1 = b[n + k], b2 = b[2 * n + k], b3 = b[3 * n + k];
+      t_bar[k] = Scalar(0.5) * (b2 - b0);
+      t2_bar[k] = Scalar(0.5) * (b0 + b2) - b1;
+      t3_bar[k] = (b3 - b0) / 6 + Scalar(0.5) * (b1 - b2);
+    }
+  } else if (!smoothstep) {
+    std::copy(b, b + n, t_bar);
+    return;
+  } else {
+    for (int k = 0; k < n; ++k) {
+      t2_bar[k] = 3 * b[k];
+      t3_bar[k] = -2 * b[k];
+    }
+  }
+  series_product_adjoint(t3_bar, t, t2_bar, n);  // t³ = t² · t
+  series_product_adjoint(t3_bar, t2, t_bar, n);
+  series_product_adjoint(t2_bar, t, t_bar, n);   // t² = t · t, both factors
+  series_product_adjoint(t2_bar, t, t_bar, n);
+}
+
+}  // namespace
+
 // Reverse of taylor_weights: W̄_v = (0, ω_{(p,1),v}, …, ω_{(p,K),v}) → w̄_{j,tap} = Σ_v W̄_v ⋆
 // Π_{m≠j} (corner factor m) → t̄_j → x̄_j += s_j t̄_{j,0}, ā_{p,k,j} += s_j t̄_{j,k}.
 template <typename Scalar>
@@ -109,81 +187,16 @@ void HashGridEncoding<Scalar>::taylor_adjoint(const StreamLayout& layout, const 
   thread_local SeriesScratch<Scalar> w;
   thread_local std::vector<Scalar> weights_bar;
   w.size(d, taps, corners, n);
-  // Linear and smoothstep: φ̄_j alone (w̄ = φ̄ for tap 1, −φ̄ for tap 0); cubic: each tap's.
   const int bar_taps = cubic_ ? taps : 1;
   weights_bar.resize(static_cast<size_t>(d * bar_taps * n));
   for (int dir = 0; dir < o.dirs; ++dir) {
     for (int j = 0; j < d; ++j) series(o, cell, point, dir, j, w.t + j * n, w.t2 + j * n,
                                        w.t3 + j * n, w.weights + j * taps * n);
-    std::fill(weights_bar.begin(), weights_bar.end(), Scalar(0));
-    for (int v = 0; v < corners; ++v) {
-      Scalar* w_bar = w.bar;
-      w_bar[0] = 0;
-      bool any = false;
-      for (int k = 1; k <= order; ++k) {
-        w_bar[k] = omega[layout.taylor(dir, k) * corners + v];
-        any = any || w_bar[k] != 0;
-      }
-      if (!any) continue;
-      for (int j = 0; j < d; ++j) {
-        // Π_{m≠j} of corner v's factor series.
-        Scalar* others = w.products;
-        std::fill(others, others + n, Scalar(0));
-        others[0] = 1;
-        for (int m = 0; m < d; ++m) {
-          if (m == j) continue;
-          series_product(others, w.weights + (m * taps + tap(v, m, bits_)) * n, w.tmp, n);
-          std::copy(w.tmp, w.tmp + n, others);
-        }
-        std::fill(w.bar2, w.bar2 + n, Scalar(0));
-        series_product_adjoint(w_bar, others, w.bar2, n);
-        const int k_tap = tap(v, j, bits_);
-        if (cubic_) {
-          Scalar* out = weights_bar.data() + (j * taps + k_tap) * n;
-          for (int k = 0; k < n; ++k) out[k] += w.bar2[k];
-        } else {
-          const Scalar sign = k_tap ? Scalar(1) : Scalar(-1);
-          for (int k = 0; k < n; ++k) weights_bar[j * n + k] += sign * w.bar2[k];
-        }
-      }
-    }
+    weights_adjoint(layout, o, dir, omega, cubic_, w, weights_bar);
     for (int j = 0; j < d; ++j) {
       // weights[0] is the cell's own weight, whose derivative in t_j is that of the series.
-      Scalar* t_bar = w.bar;
-      std::fill(t_bar, t_bar + n, Scalar(0));
-      const Scalar* t = w.t + j * n;
-      const Scalar* t2 = w.t2 + j * n;
-      Scalar* t2_bar = w.bar2;
-      Scalar* t3_bar = w.tmp;
-      if (cubic_) {
-        // w₀ = (1 − 3t + 3t² − t³)/6, w₁ = (4 − 6t² + 3t³)/6, w₂ = (1 + 3t + 3t² − 3t³)/6,
-        // w₃ = t³/6, read off per power of t.
-        const Scalar* b = weights_bar.data() + j * taps * n;
-        for (int k = 0; k < n; ++k) {
-          const Scalar b0 = b[k], b1 = b[n + k], b2 = b[2 * n + k], b3 = b[3 * n + k];
-          t_bar[k] = Scalar(0.5) * (b2 - b0);
-          t2_bar[k] = Scalar(0.5) * (b0 + b2) - b1;
-          t3_bar[k] = (b3 - b0) / 6 + Scalar(0.5) * (b1 - b2);
-        }
-        series_product_adjoint(t3_bar, t, t2_bar, n);  // t³ = t² · t
-        series_product_adjoint(t3_bar, t2, t_bar, n);
-        series_product_adjoint(t2_bar, t, t_bar, n);   // t² = t · t, both factors
-        series_product_adjoint(t2_bar, t, t_bar, n);
-      } else {
-        const Scalar* pb = weights_bar.data() + j * n;
-        if (!smoothstep_) {
-          std::copy(pb, pb + n, t_bar);
-        } else {
-          for (int k = 0; k < n; ++k) {
-            t2_bar[k] = 3 * pb[k];
-            t3_bar[k] = -2 * pb[k];
-          }
-          series_product_adjoint(t3_bar, t, t2_bar, n);  // t³ = t² · t
-          series_product_adjoint(t3_bar, t2, t_bar, n);
-          series_product_adjoint(t2_bar, t, t_bar, n);   // t² = t · t, both factors
-          series_product_adjoint(t2_bar, t, t_bar, n);
-        }
-      }
+      t_adjoint(weights_bar.data() + j * bar_taps * n, w.t + j * n, w.t2 + j * n, n, cubic_, smoothstep_, w);
+      const Scalar* t_bar = w.bar;
       const Scalar s = cell.scale[j];
       point_adjoint[j] += s * t_bar[0];
       for (int k = 1; k <= order; ++k) point_adjoint[o.taylor_at(dir, k) + j] += s * t_bar[k];

@@ -75,7 +75,7 @@
 //    rows): refused with a hint rather than read as few long rows.
 //  * Text tables are read whole into memory: the file's bytes plus twice the values while
 //    they move into the matrix (10⁶ rows × 4 columns, an 80 MB CSV: about 150 MB at the
-//    peak, 0.35 s on one core).
+//    peak; its time: docs/experiments.md).
 
 #include <cstdint>
 #include <filesystem>

@@ -36,17 +36,19 @@ Eigen::MatrixXd outward_normals(const Domain& d, const std::vector<Face>& faces,
   return normal;
 }
 
-// a u + b ∂u/∂n − g (neumann: a absent, b = 1), from the gradient streams.
-std::unique_ptr<Residual> normal_residual(const ConditionItem& item, const Domain& d, const Eigen::MatrixXd& x) {
+// a u + b ∂u/∂n − g (neumann: a absent, b = 1), from the value and the gradient streams of
+// `layout` (tangents along the axes).
+std::unique_ptr<Residual> normal_residual(const ConditionItem& item, const Domain& d,
+                                          const autodiff::StreamLayout& layout, const Eigen::MatrixXd& x) {
   const Eigen::MatrixXd normal =
       item.parts ? Eigen::MatrixXd(d.boundary_normals(x).leftCols(d.space_dim())) : outward_normals(d, item.faces, x);
   const Eigen::VectorXd b = item.robin_b ? item.robin_b->evaluate(x) : Eigen::VectorXd::Ones(x.rows());
   std::vector<LinearResidual::Term> t;
   for (size_t k = 0; k < item.outputs.size(); ++k) {
     const int c = item.outputs[k], component = static_cast<int>(k);
-    if (item.robin_a) t.push_back({component, 0, c, item.robin_a->evaluate(x)});
+    if (item.robin_a) t.push_back({component, layout.value(), c, item.robin_a->evaluate(x)});
     for (int a = 0; a < d.space_dim(); ++a)
-      t.push_back({component, 1 + a, c, item.robin_b ? Eigen::VectorXd(normal.col(a).cwiseProduct(b))
+      t.push_back({component, layout.tangent(a), c, item.robin_b ? Eigen::VectorXd(normal.col(a).cwiseProduct(b))
                                                      : Eigen::VectorXd(normal.col(a))});
   }
   return std::make_unique<LinearResidual>(std::move(t), targets(item, x));
@@ -60,13 +62,13 @@ LossTerm term_of(const ConditionItem& item, const Domain& domain) {
     term.batch_key = "initial";
     term.sample = [&domain](Random& rng, Eigen::Index n) { return domain.sample_initial(rng, n); };
     term.spec = autodiff::StreamSpec::values(domain.input_dim());
-    int stream = 0;
+    int stream = autodiff::StreamLayout::value();
     term.name = "initial";
     if (item.type == ConditionType::kInitialVelocity) {
       term.name = "initial_velocity";
       term.spec.tangents = Eigen::MatrixXd::Zero(domain.input_dim(), 1);
       term.spec.tangents(domain.time_column(), 0) = 1.0;
-      stream = 1;
+      stream = autodiff::StreamLayout(term.spec).tangent(0);
     }
     term.residual = [shared, stream](const Eigen::MatrixXd& x) {
       return std::make_unique<LinearResidual>(value_residual(*shared, x, stream));
@@ -87,14 +89,16 @@ LossTerm term_of(const ConditionItem& item, const Domain& domain) {
       term.name = "dirichlet";
       term.spec = autodiff::StreamSpec::values(domain.input_dim());
       term.residual = [shared](const Eigen::MatrixXd& x) {
-        return std::make_unique<LinearResidual>(value_residual(*shared, x, 0));
+        return std::make_unique<LinearResidual>(value_residual(*shared, x, autodiff::StreamLayout::value()));
       };
       break;
     case ConditionType::kNeumann:
     case ConditionType::kRobin:
       term.name = item.type == ConditionType::kNeumann ? "neumann" : "robin";
       term.spec = autodiff::StreamSpec::gradient(domain.input_dim());
-      term.residual = [shared, d = &domain](const Eigen::MatrixXd& x) { return normal_residual(*shared, *d, x); };
+      term.residual = [shared, d = &domain, layout = autodiff::StreamLayout(term.spec)](const Eigen::MatrixXd& x) {
+        return normal_residual(*shared, *d, layout, x);
+      };
       break;
     case ConditionType::kPeriodic:
       term.name = "periodic";

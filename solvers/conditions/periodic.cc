@@ -8,7 +8,7 @@ namespace nfield::solvers {
 void PeriodicResidual::evaluate(Eigen::Index first, const StreamLayout& layout, const Streams<double>& out,
                                 Eigen::MatrixXd& r) const {
   const auto [k0, k1] = autodiff::groups_in_block(groups_, first, out.points);
-  const auto value = out.stream(0);
+  const auto value = out.stream(layout.value());
   const auto slope = out.stream(layout.tangent(0));
   r.resize(static_cast<Eigen::Index>(k1 - k0), components());
   for (size_t k = k0; k < k1; ++k) {
@@ -24,7 +24,7 @@ void PeriodicResidual::evaluate(Eigen::Index first, const StreamLayout& layout, 
 void PeriodicResidual::backward(Eigen::Index first, const StreamLayout& layout, const Streams<double>& out,
                                 const Eigen::MatrixXd& r_bar, Streams<double>& adjoint) const {
   const auto [k0, k1] = autodiff::groups_in_block(groups_, first, out.points);
-  auto value = adjoint.stream(0);
+  auto value = adjoint.stream(layout.value());
   auto slope = adjoint.stream(layout.tangent(0));
   for (size_t k = k0; k < k1; ++k) {
     const Eigen::Index p = groups_[k] - first, row = static_cast<Eigen::Index>(k - k0);

@@ -221,7 +221,7 @@ void fill_streams(const StreamLayout& layout, const std::vector<Eigen::MatrixXd>
                   const Jet& jet, int channel, Streams<double>& s) {
   const Eigen::MatrixXd& v = layout.spec().tangents;
   const Eigen::Index d = jet.gradient.cols();
-  s.stream(0).col(channel) = jet.value;
+  s.stream(layout.value()).col(channel) = jet.value;
   for (int i = 0; i < layout.tangents(); ++i)
     s.stream(layout.tangent(i)).col(channel) = jet.gradient * v.col(i);
   for (int q = 0; q < layout.operators(); ++q) {

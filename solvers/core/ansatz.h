@@ -57,9 +57,9 @@
 // with D = e_k, the k-th unit vector in double, and N seeded as ceres::Jet<double, 8> unit
 // duals, a chunk of 8 streams per pass, the dual part j of u_i is M_ijk exactly. That is
 // S·⌈S/8⌉ passes per layout, S = 1 + T + Q (one chunk up to 3D + time with three operators;
-// S is known only at run time, hence chunks rather than Jet<double, S>): about 1 µs for
-// S = 5. Ansatz::streams does it once, beside the A and D streams (AnsatzStreams::terms); on
-// every call of the adjoint, a block of 128 points, it would double the adjoint's cost.
+// S is known only at run time, hence chunks rather than Jet<double, S>). Ansatz::streams does
+// it once, beside the A and D streams (AnsatzStreams::terms), rather than on every call of the
+// adjoint, a block of 128 points, whose cost it would double (timings: docs/experiments.md).
 // Nothing is stored per point. The adjoint is then
 //
 //     N̄_j += Σ_ik M_ijk D_k ū_i,    one column product per nonzero M_ijk,
@@ -70,9 +70,9 @@
 //     N̄⁽ʲ⁾  += D⁰ ū⁽ʲ⁾ + Σ_C ū^[C] Σᵢ (Cᵢⱼ + Cⱼᵢ) D⁽ⁱ⁾
 //     N̄^[C] += D⁰ ū^[C]
 //
-// which tests/solvers/core/ansatz_adjoint_test.cc keeps as the reference (5 µs either way for the
-// 3000 points above). A change to the rule that breaks bilinearity (a product of two D or two
-// N streams) makes that test fail.
+// which tests/solvers/core/ansatz_adjoint_test.cc keeps as the reference (as fast as the
+// coefficient form: docs/experiments.md). A change to the rule that breaks bilinearity (a
+// product of two D or two N streams) makes that test fail.
 //
 // The streams of A and D come from their gradient ∇ and Hessian H in input coordinates:
 // a⁽ⁱ⁾ = ∇a·vᵢ, a^[C] = Σ_ab (V C Vᵀ)_ab H_ab. D is a product of closed forms (polynomials,

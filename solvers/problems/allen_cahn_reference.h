@@ -46,7 +46,8 @@ struct AllenCahnOptions {
 
 class AllenCahnReference {
  public:
-  // Solves the problem (the cost: T/h steps of four FFT pairs of size N; 0.1 s at the defaults).
+  // Solves the problem (the cost: T/h steps of four FFT pairs of size N; timed in
+  // docs/experiments.md).
   explicit AllenCahnReference(const AllenCahnOptions& options = {});
 
   const AllenCahnOptions& options() const { return options_; }

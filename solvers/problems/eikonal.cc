@@ -35,8 +35,8 @@
 //             normal, L the domain's diagonal: every first-arrival ray starts at the source,
 //             so no wave enters the box (∂u/∂n ≥ 0) and times are ≥ 0. |∇u| = 1/v alone also
 //             holds for fields with extra "sources" outside or on the box (u decreasing towards
-//             a face, e.g. the mirror branch −u in a region), which a network finds readily;
-//             in the two-layer example (factored) it brought rel_l2 from 0.25 to 0.02.
+//             a face, e.g. the mirror branch −u in a region), which a network finds readily
+//             (the two-layer example's figures with and without the term: docs/experiments.md).
 //   "source"  (batch `source`) the source condition at x₀ itself; its n points are all x₀,
 //             so `source: 1` is enough. r = u(x₀) (plain), r = τ(x₀) (factored).
 //   "interface" (batch `interface`, only with `layers` and interface_weight > 0) points on
@@ -78,9 +78,8 @@
 // makes meeting fronts cheap to round and drops the bias of the spreading ones. It no longer
 // makes ridges dear (they go unpenalized, as without viscosity). The operator stays
 // degenerate elliptic (nonincreasing in D²u), so ε → 0 still gives the viscosity solution.
-// With cusp features and the "interface" term it ended lower than the full Laplacian on
-// average over three seeds, so configs/accuracy_eikonal_layered.yaml uses it (seed tables:
-// docs/experiments.md).
+// With cusp features and the "interface" term it ended lower than the full Laplacian, so
+// configs/accuracy_eikonal_layered.yaml uses it (seed tables: docs/experiments.md).
 //
 // The solution is a cone at x₀ (u ≈ |x − x₀|/v₀), whose kink a smooth network rounds off.
 // With `factored: true` the travel time is factored as u = T₀ (1 + τ) with the analytic
@@ -206,84 +205,13 @@ class Eikonal final : public Problem {
       : domain_(Domain::from_config(context.root.child("domain"))) {
     const io::ConfigNode domain_node = context.root.child("domain");
     if (domain_.has_time()) throw domain_node.error("time", "the eikonal equation has no time axis");
-    const int d = domain_.space_dim();
-    if (d < 2) throw domain_node.error("lower", "the eikonal problem needs 2 or 3 space dimensions");
+    if (domain_.space_dim() < 2)
+      throw domain_node.error("lower", "the eikonal problem needs 2 or 3 space dimensions");
     const io::ConfigNode equation = context.root.child("equation");
-    const auto vars = domain_.expression_variables();
-
-    const auto source = equation.get_list<double>("source", static_cast<std::size_t>(d));
-    x0_.resize(d);
-    for (int a = 0; a < d; ++a) {
-      x0_(a) = source[a];
-      equation.require("source", source[a] >= domain_.lower()[a] && source[a] <= domain_.upper()[a],
-                       "expected a point inside the domain");
-    }
-    const bool has_speed = equation.has("speed"), has_layers = equation.has("layers");
-    equation.require(has_speed != has_layers, "expected exactly one of `speed` and `layers`");
-    if (has_speed) {
-      speed_ = std::make_shared<io::Expression>(equation.get_expression("speed", vars));
-    } else {
-      const io::ConfigNode layers = equation.child("layers");
-      std::vector<std::string> axes{"x", "y", "z"};
-      axes.resize(d);
-      const std::string axis = layers.get_choice("axis", axes);
-      layers_.axis = static_cast<int>(std::find(axes.begin(), axes.end(), axis) - axes.begin());
-      layers_.interface = layers.get<double>("interface");
-      layers.require("interface",
-                     layers_.interface > domain_.lower()[layers_.axis] &&
-                         layers_.interface < domain_.upper()[layers_.axis],
-                     "expected a plane inside the domain");
-      const auto speeds = layers.get_list<double>("speeds", 2);
-      for (int k = 0; k < 2; ++k) {
-        layers.require("speeds", speeds[k] > 0 && std::isfinite(speeds[k]), "expected speeds > 0");
-        layers_.speeds[k] = speeds[k];
-      }
-      layers.reject_unknown_keys();
-    }
-    const Eigen::MatrixXd x0_row = x0_.transpose();
-    v0_ = speeds(x0_row)(0);
-    equation.require(has_speed ? "speed" : "layers", v0_ > 0 && std::isfinite(v0_),
-                     "expected a speed > 0 at the source");
-    if (has_speed && speed_->is_constant()) constant_speed_ = v0_;
-    if (equation.has("exact")) {
-      equation.require("exact", has_speed && !speed_->is_constant(),
-                       "not used: the exact solution of a constant speed or of layers is built in");
-      exact_ = std::make_shared<io::Expression>(equation.get_expression("exact", vars));
-    }
-    factored_ = equation.get_or("factored", false);
-    weight_ = equation.get_or("weight", 1.0);
-    equation.require("weight", weight_ > 0 && std::isfinite(weight_), "expected a weight > 0");
-    source_fraction_ = equation.get_or("source_fraction", 0.25);
-    equation.require("source_fraction", source_fraction_ >= 0 && source_fraction_ <= 1,
-                     "expected a fraction in [0, 1]");
-    interface_weight_ = equation.get_or("interface_weight", 0.0);
-    equation.require("interface_weight", interface_weight_ >= 0 && std::isfinite(interface_weight_),
-                     "expected a weight >= 0");
-    equation.require("interface_weight", interface_weight_ == 0 || !has_speed,
-                     "needs `layers`: the term is about their interface");
-    outflow_weight_ = equation.get_or("outflow_weight", 1.0);
-    equation.require("outflow_weight", outflow_weight_ >= 0 && std::isfinite(outflow_weight_),
-                     "expected a weight >= 0");
-    const io::ConfigNode training = context.root.child_or_empty("training");
-    const std::size_t stages = training.has("stages") ? training.child("stages").size() : 1;
-    const auto is_list = [&](const char* key) {
-      return equation.has_list(key);
-    };
-    viscosity_ = is_list("viscosity")
-                     ? per_stage<double>(equation, "viscosity", stages,
-                                         [](const io::ConfigNode& item) { return item.as<double>(); })
-                     : std::vector<double>{equation.get_or("viscosity", 0.0)};
-    for (double epsilon : viscosity_)
-      equation.require("viscosity", epsilon >= 0 && std::isfinite(epsilon), "expected numbers >= 0");
-    const std::vector<std::string> forms{"laplacian", "concave"};
-    concave_viscosity_ =
-        is_list("viscosity_form")
-            ? per_stage<bool>(equation, "viscosity_form", stages,
-                              [&](const io::ConfigNode& item) {
-                                return item.as_choice(forms) == "concave";
-                              })
-            : std::vector<bool>{equation.get_choice("viscosity_form", forms, "laplacian") ==
-                                "concave"};
+    read_source(equation);
+    const bool has_speed = read_medium(equation);
+    read_weights(equation, has_speed);
+    read_viscosity(equation, context.root.child_or_empty("training"));
     source_weight_ = equation.get_or("source_weight", 10.0);
     equation.require("source_weight", source_weight_ >= 0 && std::isfinite(source_weight_),
                      "expected a weight >= 0");
@@ -403,6 +331,98 @@ class Eikonal final : public Problem {
   }
 
  private:
+  // The constructor's steps, each reading its keys of `equation` in the order of the header.
+  void read_source(const io::ConfigNode& equation) {
+    const int d = domain_.space_dim();
+    const auto source = equation.get_list<double>("source", static_cast<std::size_t>(d));
+    x0_.resize(d);
+    for (int a = 0; a < d; ++a) {
+      x0_(a) = source[a];
+      equation.require("source", source[a] >= domain_.lower()[a] && source[a] <= domain_.upper()[a],
+                       "expected a point inside the domain");
+    }
+  }
+
+  // `speed` or `layers`, the speed v₀ at the source, and `exact`; true for `speed`.
+  bool read_medium(const io::ConfigNode& equation) {
+    const auto vars = domain_.expression_variables();
+    const bool has_speed = equation.has("speed"), has_layers = equation.has("layers");
+    equation.require(has_speed != has_layers, "expected exactly one of `speed` and `layers`");
+    if (has_speed)
+      speed_ = std::make_shared<io::Expression>(equation.get_expression("speed", vars));
+    else
+      read_layers(equation.child("layers"));
+    const Eigen::MatrixXd x0_row = x0_.transpose();
+    v0_ = speeds(x0_row)(0);
+    equation.require(has_speed ? "speed" : "layers", v0_ > 0 && std::isfinite(v0_),
+                     "expected a speed > 0 at the source");
+    if (has_speed && speed_->is_constant()) constant_speed_ = v0_;
+    if (equation.has("exact")) {
+      equation.require("exact", has_speed && !speed_->is_constant(),
+                       "not used: the exact solution of a constant speed or of layers is built in");
+      exact_ = std::make_shared<io::Expression>(equation.get_expression("exact", vars));
+    }
+    return has_speed;
+  }
+
+  void read_layers(const io::ConfigNode& layers) {
+    std::vector<std::string> axes{"x", "y", "z"};
+    axes.resize(domain_.space_dim());
+    const std::string axis = layers.get_choice("axis", axes);
+    layers_.axis = static_cast<int>(std::find(axes.begin(), axes.end(), axis) - axes.begin());
+    layers_.interface = layers.get<double>("interface");
+    layers.require("interface",
+                   layers_.interface > domain_.lower()[layers_.axis] &&
+                       layers_.interface < domain_.upper()[layers_.axis],
+                   "expected a plane inside the domain");
+    const auto speeds = layers.get_list<double>("speeds", 2);
+    for (int k = 0; k < 2; ++k) {
+      layers.require("speeds", speeds[k] > 0 && std::isfinite(speeds[k]), "expected speeds > 0");
+      layers_.speeds[k] = speeds[k];
+    }
+    layers.reject_unknown_keys();
+  }
+
+  void read_weights(const io::ConfigNode& equation, bool has_speed) {
+    factored_ = equation.get_or("factored", false);
+    weight_ = equation.get_or("weight", 1.0);
+    equation.require("weight", weight_ > 0 && std::isfinite(weight_), "expected a weight > 0");
+    source_fraction_ = equation.get_or("source_fraction", 0.25);
+    equation.require("source_fraction", source_fraction_ >= 0 && source_fraction_ <= 1,
+                     "expected a fraction in [0, 1]");
+    interface_weight_ = equation.get_or("interface_weight", 0.0);
+    equation.require("interface_weight", interface_weight_ >= 0 && std::isfinite(interface_weight_),
+                     "expected a weight >= 0");
+    equation.require("interface_weight", interface_weight_ == 0 || !has_speed,
+                     "needs `layers`: the term is about their interface");
+    outflow_weight_ = equation.get_or("outflow_weight", 1.0);
+    equation.require("outflow_weight", outflow_weight_ >= 0 && std::isfinite(outflow_weight_),
+                     "expected a weight >= 0");
+  }
+
+  // `viscosity` and `viscosity_form`: one value, or a list with one per training stage.
+  void read_viscosity(const io::ConfigNode& equation, const io::ConfigNode& training) {
+    const std::size_t stages = training.has("stages") ? training.child("stages").size() : 1;
+    const auto is_list = [&](const char* key) {
+      return equation.has_list(key);
+    };
+    viscosity_ = is_list("viscosity")
+                     ? per_stage<double>(equation, "viscosity", stages,
+                                         [](const io::ConfigNode& item) { return item.as<double>(); })
+                     : std::vector<double>{equation.get_or("viscosity", 0.0)};
+    for (double epsilon : viscosity_)
+      equation.require("viscosity", epsilon >= 0 && std::isfinite(epsilon), "expected numbers >= 0");
+    const std::vector<std::string> forms{"laplacian", "concave"};
+    concave_viscosity_ =
+        is_list("viscosity_form")
+            ? per_stage<bool>(equation, "viscosity_form", stages,
+                              [&](const io::ConfigNode& item) {
+                                return item.as_choice(forms) == "concave";
+                              })
+            : std::vector<bool>{equation.get_choice("viscosity_form", forms, "laplacian") ==
+                                "concave"};
+  }
+
   // The factored run's travel time u = T₀ (1 + τ) against the exact one on the output grid.
   struct TravelTimeOnGrid {
     io::Grid grid;

@@ -147,7 +147,8 @@ class Fit final : public Problem, public ReportsProgress, public HasInstances {
       for (Eigen::Index i = 0; i < x.rows(); ++i)
         target.row(i) = signal_.values.row(index_of(x.row(i))).cast<double>();
       std::vector<LinearResidual::Term> terms;
-      for (int c = 0; c < signal_.channels; ++c) terms.push_back({c, 0, c, Eigen::VectorXd::Ones(1)});
+      for (int c = 0; c < signal_.channels; ++c)
+        terms.push_back({c, autodiff::StreamLayout::value(), c, Eigen::VectorXd::Ones(1)});
       return std::make_unique<LinearResidual>(std::move(terms), std::move(target));
     };
     return {term};

@@ -247,7 +247,9 @@ class Sdf final : public Problem {
                                                       : io::point_cloud_distance(row, points_)(0));
       }
       return std::make_unique<LinearResidual>(
-          std::vector<LinearResidual::Term>{{0, 0, 0, Eigen::VectorXd::Constant(1, root)}}, target);
+          std::vector<LinearResidual::Term>{
+              {0, autodiff::StreamLayout::value(), 0, Eigen::VectorXd::Constant(1, root)}},
+          target);
     };
     return {surface, interior, box};
   }
@@ -284,7 +286,15 @@ class Sdf final : public Problem {
       }
       return;
     }
-    // Against the reference mesh, or else against the input cloud (its points and normals).
+    chamfer_metrics(surface, metrics);
+    if (reference_) sign_metrics(grid, u, metrics);
+  }
+
+ private:
+  // Chamfer distances and normal consistency of the extracted surface against the reference
+  // mesh, or else against the input cloud (its points and normals).
+  void chamfer_metrics(const io::TriangleMesh& surface,
+                       std::vector<std::pair<std::string, double>>& metrics) const {
     const auto started = std::chrono::steady_clock::now();
     io::SurfaceComparison c;
     Eigen::MatrixXd target_points;
@@ -312,8 +322,14 @@ class Sdf final : public Problem {
     metrics.emplace_back("normal_consistency", c.normal_consistency);
     metrics.emplace_back("chamfer_seconds",
                          std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
-    if (!reference_) return;
+  }
 
+  // How often the sign of u on the grid agrees with inside/outside the reference mesh, over
+  // the grid and within 5 % of the mesh's diagonal from it.
+  void sign_metrics(const io::Grid& grid, const Eigen::VectorXd& u,
+                    std::vector<std::pair<std::string, double>>& metrics) const {
+    const Eigen::Index n = u.size();
+    const double nan = std::numeric_limits<double>::quiet_NaN();
     const double band = 0.05 * (reference_->vertices.colwise().maxCoeff() -
                                 reference_->vertices.colwise().minCoeff()).norm();
     const auto sign_started = std::chrono::steady_clock::now();
@@ -342,7 +358,6 @@ class Sdf final : public Problem {
                          std::chrono::duration<double>(std::chrono::steady_clock::now() - sign_started).count());
   }
 
- private:
   // 6 faces × 96² points, one per cell of a 96 × 96 grid on each face (jittered, seed fixed).
   void make_box_pool() {
     constexpr int kSide = 96;

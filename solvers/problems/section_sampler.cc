@@ -171,6 +171,108 @@ SamplerUpdate SectionSampler::update(const integrators::Rays<double>& rays, cons
   return result;
 }
 
+namespace {
+
+// φ = ∇ₓΦ · d at each section end (row k(K + 1) + e for end e of the k-th ray with sections),
+// from the tangent streams of Φ along the three axes.
+Eigen::MatrixXd end_rates(const integrators::Rays<double>& rays, const autodiff::StreamLayout& layout,
+                          const autodiff::Streams<double>& phi_streams, Eigen::Index hit, Eigen::Index ends) {
+  Eigen::MatrixXd rate(hit * ends, 4);
+  Eigen::Index k = 0;
+  for (Eigen::Index r = 0; r < rays.size(); ++r) {
+    if (!(rays.far(r) > rays.near(r))) continue;
+    for (Eigen::Index e = 0; e < ends; ++e) {
+      const Eigen::Index row = k * ends + e;
+      rate.row(row).setZero();
+      for (int a = 0; a < 3; ++a)
+        rate.row(row) += rays.directions(r, a) * phi_streams.stream(layout.tangent(a)).row(row);
+    }
+    ++k;
+  }
+  return rate;
+}
+
+// The hit rays' rendering as at render time: the sections as samples, the section means
+// s̄ᵢ = (Φ(tᵢ₊₁) − Φ(tᵢ))/Δᵢ (row k·K + i), each hit ray's pixel and background; then the
+// means shaded (density column scaled) and the rendering's adjoints σ̄ and rgb̄ at them.
+struct SectionRendering {
+  integrators::RaySamples<double> samples;
+  Eigen::MatrixXd means, pixels, backgrounds;
+  Eigen::MatrixXd scaled;
+  Shading shading;
+  Eigen::VectorXd sigma_bar;
+  Eigen::MatrixXd rgb_bar;
+};
+
+template <typename Phi>
+SectionRendering section_rendering(const integrators::Rays<double>& rays, const Eigen::MatrixXd& t, const Phi& phi,
+                                   const Eigen::MatrixXd& target, const Eigen::MatrixXd& background) {
+  const Eigen::Index hit = t.rows(), K = t.cols() - 1, ends = K + 1;
+  SectionRendering out;
+  integrators::RaySamples<double>& samples = out.samples;
+  samples.offsets.resize(hit + 1);
+  for (Eigen::Index k = 0; k <= hit; ++k) samples.offsets[k] = k * K;
+  samples.t.resize(hit * K);
+  samples.delta.resize(hit * K);
+  out.means.resize(hit * K, 4);
+  out.pixels.resize(hit, 3);
+  out.backgrounds.resize(background.rows() == 1 ? 1 : hit, 3);
+  if (background.rows() == 1) out.backgrounds = background;
+  Eigen::Index k = 0;
+  for (Eigen::Index r = 0; r < rays.size(); ++r) {
+    if (!(rays.far(r) > rays.near(r))) continue;
+    out.pixels.row(k) = target.row(r);
+    if (background.rows() != 1) out.backgrounds.row(k) = background.row(r);
+    for (int i = 0; i < K; ++i) {
+      const double delta = t(k, i + 1) - t(k, i);
+      samples.t(k * K + i) = 0.5 * (t(k, i) + t(k, i + 1));
+      samples.delta(k * K + i) = delta;
+      out.means.row(k * K + i) = (phi.row(k * ends + i + 1) - phi.row(k * ends + i)) / delta;
+    }
+    ++k;
+  }
+  return out;
+}
+
+// Boundary adjoints t̄, then Δ̄, w̄ and the logits' z̄ (top of section_sampler.h), for the
+// boundaries t, the softmax weights w and the rates φ at the ends.
+Eigen::MatrixXd logit_adjoints(const Eigen::MatrixXd& t, const Eigen::MatrixXd& w, double min_share,
+                               const SectionRendering& sections, const Eigen::MatrixXd& rate,
+                               const DensityActivation& density, double density_scale) {
+  const Eigen::Index hit = t.rows(), K = t.cols() - 1, ends = K + 1;
+  const Shading& shading = sections.shading;
+  Eigen::MatrixXd z_bar(hit, K);
+  for (Eigen::Index k = 0; k < hit; ++k) {
+    Eigen::VectorXd t_bar = Eigen::VectorXd::Zero(ends);
+    for (int i = 0; i < K; ++i) {
+      const Eigen::Index s = k * K + i;
+      const double delta = sections.samples.delta(s);
+      Eigen::Vector4d mean_bar;
+      mean_bar(0) = sections.sigma_bar(s) * density.derivative(sections.scaled(s, 0)) * density_scale;
+      for (int c = 0; c < 3; ++c)
+        mean_bar(1 + c) = sections.rgb_bar(s, c) * shading.rgb(s, c) * (1 - shading.rgb(s, c));
+      const Eigen::RowVector4d m = sections.means.row(s);
+      t_bar(i + 1) += mean_bar.dot((rate.row(k * ends + i + 1) - m).transpose()) / delta;
+      t_bar(i) += mean_bar.dot((m - rate.row(k * ends + i)).transpose()) / delta;
+      const double delta_bar = sections.sigma_bar(s) * shading.sigma(s) / delta;  // through τ = σδ
+      t_bar(i + 1) += delta_bar;
+      t_bar(i) -= delta_bar;
+    }
+    const double length = t(k, K) - t(k, 0);
+    Eigen::VectorXd w_bar(K);
+    double suffix = 0;
+    for (Eigen::Index i = K - 1; i >= 0; --i) {
+      suffix += t_bar(i + 1);  // Δ̄ᵢ = Σ_{j>i} t̄ⱼ
+      w_bar(i) = length * (1 - min_share) * suffix;
+    }
+    const double dot = w.row(k).dot(w_bar);
+    z_bar.row(k) = w.row(k).array() * (w_bar.transpose().array() - dot);
+  }
+  return z_bar;
+}
+
+}  // namespace
+
 SamplerUpdate SectionSampler::loss_and_gradient(const integrators::Rays<double>& rays,
                                                 const Eigen::MatrixXd& target,
                                                 const Eigen::MatrixXd& background,
@@ -196,51 +298,17 @@ SamplerUpdate SectionSampler::loss_and_gradient(const integrators::Rays<double>&
   spec.tangents.topRows(3).setIdentity();
   const autodiff::StreamLayout layout(spec);
   const autodiff::Streams<double> phi_streams = field(layout, end_points(rays, t));
-  const auto phi = phi_streams.stream(autodiff::StreamLayout::value());
-  const Eigen::Index ends = K + 1;
-  Eigen::MatrixXd rate(hit * ends, 4);  // φ at each end
-  {
-    Eigen::Index k = 0;
-    for (Eigen::Index r = 0; r < rays.size(); ++r) {
-      if (!(rays.far(r) > rays.near(r))) continue;
-      for (Eigen::Index e = 0; e < ends; ++e) {
-        const Eigen::Index row = k * ends + e;
-        rate.row(row).setZero();
-        for (int a = 0; a < 3; ++a)
-          rate.row(row) += rays.directions(r, a) * phi_streams.stream(layout.tangent(a)).row(row);
-      }
-      ++k;
-    }
-  }
+  const Eigen::MatrixXd rate = end_rates(rays, layout, phi_streams, hit, K + 1);
 
-  // The rendering of the hit rays, as at render time.
-  integrators::RaySamples<double> samples;
-  samples.offsets.resize(hit + 1);
-  for (Eigen::Index k = 0; k <= hit; ++k) samples.offsets[k] = k * K;
-  samples.t.resize(hit * K);
-  samples.delta.resize(hit * K);
-  Eigen::MatrixXd means(hit * K, 4), pixels(hit, 3), backgrounds(background.rows() == 1 ? 1 : hit, 3);
-  if (background.rows() == 1) backgrounds = background;
-  {
-    Eigen::Index k = 0;
-    for (Eigen::Index r = 0; r < rays.size(); ++r) {
-      if (!(rays.far(r) > rays.near(r))) continue;
-      pixels.row(k) = target.row(r);
-      if (background.rows() != 1) backgrounds.row(k) = background.row(r);
-      for (int i = 0; i < K; ++i) {
-        const double delta = t(k, i + 1) - t(k, i);
-        samples.t(k * K + i) = 0.5 * (t(k, i) + t(k, i + 1));
-        samples.delta(k * K + i) = delta;
-        means.row(k * K + i) = (phi.row(k * ends + i + 1) - phi.row(k * ends + i)) / delta;
-      }
-      ++k;
-    }
-  }
-  Eigen::MatrixXd scaled = means;
-  scaled.col(0) *= density_scale;
-  const Shading shading = shade(scaled, density);
-  const auto rendered = integrators::render<double>(samples, shading.sigma, shading.rgb, backgrounds);
-  const Eigen::MatrixXd error = rendered.color - pixels;
+  SectionRendering sections =
+      section_rendering(rays, t, phi_streams.stream(autodiff::StreamLayout::value()), target, background);
+  sections.scaled = sections.means;
+  sections.scaled.col(0) *= density_scale;
+  sections.shading = shade(sections.scaled, density);
+  const Shading& shading = sections.shading;
+  const auto rendered =
+      integrators::render<double>(sections.samples, shading.sigma, shading.rgb, sections.backgrounds);
+  const Eigen::MatrixXd error = rendered.color - sections.pixels;
   SamplerUpdate result;
   result.loss = error.squaredNorm() / static_cast<double>(hit);
   result.max_section_share = (t.rightCols(K) - t.leftCols(K)).rowwise().maxCoeff().cwiseQuotient(
@@ -248,37 +316,12 @@ SamplerUpdate SectionSampler::loss_and_gradient(const integrators::Rays<double>&
 
   integrators::RenderAdjoint<double> bar;
   bar.color = 2 * error / static_cast<double>(hit);
-  Eigen::VectorXd sigma_bar(hit * K);
-  Eigen::MatrixXd rgb_bar(hit * K, 3);
-  integrators::render_backward<double>(samples, shading.sigma, shading.rgb, backgrounds, bar, sigma_bar, rgb_bar);
-
-  // Boundary adjoints t̄, then Δ̄, w̄ and the logits' z̄ (top of section_sampler.h).
-  Eigen::MatrixXd z_bar(hit, K);
-  for (Eigen::Index k = 0; k < hit; ++k) {
-    Eigen::VectorXd t_bar = Eigen::VectorXd::Zero(ends);
-    for (int i = 0; i < K; ++i) {
-      const Eigen::Index s = k * K + i;
-      const double delta = samples.delta(s);
-      Eigen::Vector4d mean_bar;
-      mean_bar(0) = sigma_bar(s) * density.derivative(scaled(s, 0)) * density_scale;
-      for (int c = 0; c < 3; ++c) mean_bar(1 + c) = rgb_bar(s, c) * shading.rgb(s, c) * (1 - shading.rgb(s, c));
-      const Eigen::RowVector4d m = means.row(s);
-      t_bar(i + 1) += mean_bar.dot((rate.row(k * ends + i + 1) - m).transpose()) / delta;
-      t_bar(i) += mean_bar.dot((m - rate.row(k * ends + i)).transpose()) / delta;
-      const double delta_bar = sigma_bar(s) * shading.sigma(s) / delta;  // through τ = σδ
-      t_bar(i + 1) += delta_bar;
-      t_bar(i) -= delta_bar;
-    }
-    const double length = t(k, K) - t(k, 0);
-    Eigen::VectorXd w_bar(K);
-    double suffix = 0;
-    for (int i = K - 1; i >= 0; --i) {
-      suffix += t_bar(i + 1);  // Δ̄ᵢ = Σ_{j>i} t̄ⱼ
-      w_bar(i) = length * (1 - options_.min_share) * suffix;
-    }
-    const double dot = w.row(k).dot(w_bar);
-    z_bar.row(k) = w.row(k).array() * (w_bar.transpose().array() - dot);
-  }
+  sections.sigma_bar.resize(hit * K);
+  sections.rgb_bar.resize(hit * K, 3);
+  integrators::render_backward<double>(sections.samples, shading.sigma, shading.rgb, sections.backgrounds, bar,
+                                       sections.sigma_bar, sections.rgb_bar);
+  const Eigen::MatrixXd z_bar =
+      logit_adjoints(t, w, options_.min_share, sections, rate, density, density_scale);
 
   // S's reverse pass with z̄ as the adjoint of its outputs.
   const autodiff::StreamLayout values_layout(autodiff::StreamSpec::values(6));

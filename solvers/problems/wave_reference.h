@@ -89,6 +89,12 @@ class WaveReference {
     return i[0] + static_cast<Eigen::Index>(stride_[1]) * i[1] + static_cast<Eigen::Index>(stride_[2]) * i[2];
   }
   double interpolate_space(const Eigen::VectorXf& snapshot, const Eigen::RowVectorXd& x) const;
+  // The constructor's steps: the grid from the domain and options (checked), Δt, the time loop.
+  struct Stepper;  // nodes, coefficients and boundary values of the leapfrog (wave_reference.cc)
+  Eigen::Index set_up_grid(const Domain& domain, const WaveReferenceData& data,
+                           const WaveReferenceOptions& options);
+  long choose_time_step(Stepper& stepper, const WaveReferenceOptions& options);
+  void march(Stepper& stepper, long steps_per_snapshot, const std::function<void(long, long)>& progress);
 
   int dim_ = 0;
   std::array<int, 3> cells_{0, 0, 0};       // N_a (1 beyond dim_: a single node)

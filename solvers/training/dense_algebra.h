@@ -23,8 +23,8 @@ namespace nfield::solvers::dense {
 
 // Sets the calling thread's OpenMP thread count (and with it BLAS's) for its lifetime;
 // `threads` <= 0 leaves it as it is. Given the order P of the products, one thread below
-// kParallelOrder: there the threads' synchronisation costs more than it saves (an LM stage
-// of P = 129 ran 20 % slower on two threads than Ceres on one, on a busy machine).
+// kParallelOrder: there the threads' synchronisation costs more than it saves (figures:
+// docs/experiments.md).
 class BlasThreads {
  public:
   static constexpr Eigen::Index kParallelOrder = 384;
@@ -48,8 +48,8 @@ Eigen::VectorXd symmetric_product(const Eigen::MatrixXd& a, const Eigen::VectorX
 // M = UᵀU for symmetric positive definite M (upper triangle, overwritten by U), blocked by
 // columns of `block`: each diagonal block by potrf on one thread, then the panel right of it
 // by trsm and the trailing matrix by a syrk of rank `block`, on all threads. (OpenBLAS's own
-// threaded potrf synchronises its threads so often that on a busy 2-core machine it ran
-// 5–12× slower on two threads than on one; its syrk and trsm do not.) False when M is not
+// threaded potrf synchronises its threads so often that it is slower on two threads than on
+// one, docs/experiments.md; its syrk and trsm do not.) False when M is not
 // positive definite to working precision (a pivot <= 0).
 bool cholesky(Eigen::MatrixXd& m, int block = 256);
 // Solves M x = b that way (then potrs): M is overwritten by its factor, b by x (undefined
