@@ -70,8 +70,8 @@ const Own& own_options(const EncodingOptions& options) {
   if (!options.own.has_value()) return defaults;
   if (const Own* own = std::any_cast<Own>(&options.own)) return *own;
   throw std::invalid_argument("encoding.type = " + options.type +
-                              ": its options hold another encoding's (" +
-                              std::string(options.own.type().name()) + ")");
+                              ": its options hold another encoding's; set type and options "
+                              "together (encoding_options)");
 }
 
 // Options of Own's type (Own::kType) holding `own`; lower and upper empty.

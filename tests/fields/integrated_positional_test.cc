@@ -167,7 +167,7 @@ TEST(IntegratedPositional, RegisteredAndReadsVariances) {
   EXPECT_FALSE(reads_variances(o));
   o.type = "integrated_positional";
   EXPECT_THROW(o.validate(3), std::invalid_argument);  // an odd input: no [μ, σ²] split
-  o.frequencies = 25;
+  o = encoding_options(IntegratedPositionalOptions{.frequencies = 25});
   EXPECT_THROW(o.validate(), std::invalid_argument);
   FieldOptions nerf = nerf_options("integrated_positional");
   nerf.input_dim = 6;  // a nerf field with it takes [x, d, σ²]
