@@ -20,6 +20,7 @@
 #include <random>
 
 #include "fields/field.h"
+#include "fields/positional_encoding.h"
 #include "integrators/multiview_dataset.h"
 #include "integrators/radiance_activations.h"
 #include "integrators/ray_batch.h"
@@ -106,8 +107,7 @@ int main(int argc, char** argv) {
   options.output_dim = 4;
   options.hidden = {64, 64, 64};
   options.color_hidden = {32};
-  options.encoding.type = "positional";
-  options.encoding.frequencies = 8;
+  options.encoding = fields::encoding_options(fields::PositionalOptions{.frequencies = 8});
   fields::Field<float> field(options);
   solvers::Adam<float> adam(field.parameter_count(), {lr});
 

@@ -1,9 +1,11 @@
 // SPDX-License-Identifier: MIT
 #include "fields/encodings.h"
 
+#include <numbers>
 #include <stdexcept>
 
 #include "autodiff/elementwise.h"
+#include "fields/activations.h"
 
 namespace nfield::fields {
 
@@ -90,5 +92,27 @@ void FeatureEncoding<Scalar>::backward(const autodiff::StreamLayout& layout, con
 
 template class FeatureEncoding<float>;
 template class FeatureEncoding<double>;
+
+template <typename Scalar>
+std::unique_ptr<autodiff::Module<Scalar>> make_sinusoids(const Eigen::MatrixXd& b, bool include_input,
+                                                         const Eigen::VectorXd& scales) {
+  const Eigen::Index m = b.rows();
+  Eigen::MatrixXd doubled(2 * m, b.cols());
+  doubled << b, b;
+  Eigen::VectorXd phase(2 * m);
+  phase << Eigen::VectorXd::Zero(m), Eigen::VectorXd::Constant(m, std::numbers::pi / 2);
+  Eigen::VectorXd doubled_scales;
+  if (scales.size() > 0) {
+    doubled_scales.resize(2 * m);
+    doubled_scales << scales, scales;
+  }
+  return std::make_unique<FeatureEncoding<Scalar>>(
+      doubled, phase, make_activation<Scalar>({"sine", 1.0}), include_input, doubled_scales);
+}
+
+template std::unique_ptr<autodiff::Module<float>> make_sinusoids<float>(const Eigen::MatrixXd&, bool,
+                                                                        const Eigen::VectorXd&);
+template std::unique_ptr<autodiff::Module<double>> make_sinusoids<double>(const Eigen::MatrixXd&, bool,
+                                                                          const Eigen::VectorXd&);
 
 }  // namespace nfield::fields

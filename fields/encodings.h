@@ -3,50 +3,35 @@
 // Input encodings γ(x). Each is a fixed affine map z = W x + b followed by an elementwise
 // function, so it reuses the elementwise stream rules of autodiff/elementwise.h:
 //
-//   positional  γ(x) = [x, sin(B x), cos(B x)], B = rows 2ˡ π eᵢ, l < L (NeRF; Mildenhall 2020)
+//   positional  γ(x) = [x, sin(B x), cos(B x)], B = rows 2ˡ π eᵢ, l < L (NeRF; Mildenhall 2020),
+//               fields/positional_encoding.h
 //   fourier     γ(x) = [sin(2π B x), cos(2π B x)], B ~ N(0, σ²), m × d (Tancik et al. 2020);
 //               with `scales`, B stacks one m × d block per scale, column a of block g drawn
 //               N(0, σ_ga²): several scales, and a different one per axis (x slow, t fast:
 //               the closest to DeepXDE's spatio-temporal multi-scale Fourier features, whose
-//               x and t features go through the network apart and are multiplied after it)
-//   cusp        γ(x) = [x, |x_a − c₁|, …, |x_a − c_k|] for planes x_a = c_k
+//               x and t features go through the network apart and are multiplied after it),
+//               fields/fourier_encoding.h
+//   cusp        γ(x) = [x, |x_a − c₁|, …, |x_a − c_k|] for planes x_a = c_k (a kink across
+//               a plane; features that may enter at a later stage), fields/cusp_encoding.h
 //   identity    γ(x) = x (no module)
 //   hash_grid   trainable multiresolution grids (Müller et al. 2022), fields/hash_grid.h
 //   integrated_positional  E[γ(x)] for x ~ N(μ, diag σ²): the positional encoding damped
 //               by e^{−½ω²σ²}, input [μ, σ²] (mip-NeRF; Barron 2021), fields/integrated_positional.h
 //
-// Each type is one entry of a registry (fields/encoding_type.h) that validates its options,
-// reads and writes its config keys and checkpoint attributes, and creates its module.
+// Each type is one entry of a registry (fields/encoding_type.h) that reads, validates, writes
+// and saves its own typed options (PositionalOptions in fields/positional_encoding.h, …),
+// held type-erased in EncodingOptions::own, and creates its module.
 //
 // Sinusoids use sin only (cos z = sin(z + π/2)): W = [B; B], b = [0; π/2].
-//
-// Cusp features (Tseng, Lin, Hu and Lai 2023, cusp-capturing PINNs) let a smooth network
-// represent a function that is continuous across a plane but whose normal derivative jumps
-// there, as travel times in a layered medium or potentials across a material interface do.
-// With f₋, f₊ smooth on either side and equal on the plane, f₊ − f₋ = (x_a − c) h, so
-//   f = (f₊ + f₋)/2 + |x_a − c| h/2,
-// a smooth function of [x, |x_a − c|]. A network of x alone has to round the kink off over
-// a width that only shrinks with the network's size.
-// Pitfall: |·| has derivative sign(z) (0 on the plane) and no higher ones in the streams; the
-// δ of the second derivative on the plane is not there. Residuals of first order (eikonal)
-// are exact on both sides; a second-order residual must not be asked across the plane.
-//
-// Cusp features that enter late (`from_stage: k`): the first layer's weights on the cusp
-// features start at zero, and in the training stages before k the features are switched off
-// (zero in every stream), so those weights get zero gradients and zero Jacobian columns from
-// every optimizer and stay at zero; at stage k the features are switched on, with the field
-// unchanged at that moment. A network that can form a kink on the plane from the start can
-// also form the wrong one: on the two-layer Eikonal example (configs/accuracy_eikonal_layered
-// .yaml) Adam with cusp features put a steep layer on the fast side of the interface in place
-// of the head wave below it, which features entering for the Levenberg–Marquardt stages
-// avoid (figures: docs/experiments.md).
 //
 // The matrix B (or the rows e_a of a cusp encoding) is part of the field and saved with it;
 // it is not trained.
 #pragma once
 
+#include <any>
 #include <cstdint>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -55,38 +40,48 @@
 
 namespace nfield::fields {
 
+// What every encoding has: its type and the box its inputs come from. The keys of one type
+// live in that type's own struct (PositionalOptions, FourierOptions, CuspOptions,
+// HashGridOptions, IntegratedPositionalOptions), held in `own` and read back with
+// own_options<T>; encoding_options(T{…}) makes options of T's type.
 struct EncodingOptions {
   std::string type = "identity";  // a registered name (encoding_names())
-  int frequencies = 6;            // positional, integrated_positional: L, frequencies 2⁰π … 2^(L−1)π per axis
-  bool include_input = true;      // positional, integrated_positional, hash_grid: keep x itself in γ(x)
-  bool normalize = false;         // positional: octave l scaled by 2⁻ˡ (derivatives bounded)
-  int features = 128;             // fourier: m
-  double scale = 10.0;            // fourier: σ
-  // fourier: one block of `features` rows per entry, σ per axis (one value: every axis);
-  // empty: one block at `scale`
-  std::vector<std::vector<double>> scales;
-  std::uint64_t seed = 0;         // fourier: draws B
-  int axis = 0;                   // cusp: the input a normal to the planes
-  std::vector<double> at;         // cusp: the planes x_a = c, at least one
-  int from_stage = 0;             // cusp: the training stage at which the features enter
-  int levels = 16;                // hash_grid: L
-  int features_per_level = 2;     // hash_grid: F
-  int log2_table_size = 19;       // hash_grid: T = 2^log2_table_size entries per level, 10…24
-  int base_resolution = 16;       // hash_grid: N_min cells per axis on the coarsest level
-  int finest_resolution = 512;    // hash_grid: N_max on the finest level
-  std::string interpolation = "linear";  // hash_grid: linear | smoothstep | cubic
-  double init_scale = 1e-4;       // hash_grid: tables start U(−init_scale, init_scale)
   // The box [lower, upper] the inputs come from (the field's domain), one bound per input
-  // (per coordinate, for an encoding that reads variances beside them);
-  // both empty: [0, 1]^d. Set by the program from the problem's domain, not a config key;
-  // saved with the field. Only hash_grid reads it.
+  // (per coordinate, for an encoding that reads variances beside them); both empty: [0, 1]^d.
+  // Set by the program from the problem's domain (fit_encoding, fields/encoding_type.h), not
+  // a config key; saved with the field. hash_grid reads it, and so do the field types that
+  // tile the domain (bacon, acorn) whatever their encoding.
   std::vector<double> lower, upper;
+  // The type's own options struct; empty: that struct's defaults. Set by the type's registry
+  // entry (read, load) or by encoding_options().
+  std::any own;
 
   // Throws std::invalid_argument naming the field, its value and the rule.
   void validate() const;
   // validate(), then the rules that need the input dimension d (bounds, cusp axis).
   void validate(int input_dim) const;
 };
+
+// The options of an encoding type, as its own struct `Own`: `own` when it holds one, Own's
+// defaults when it is empty; std::invalid_argument when it holds another type's struct.
+template <class Own>
+const Own& own_options(const EncodingOptions& options) {
+  static const Own defaults{};
+  if (!options.own.has_value()) return defaults;
+  if (const Own* own = std::any_cast<Own>(&options.own)) return *own;
+  throw std::invalid_argument("encoding.type = " + options.type +
+                              ": its options hold another encoding's; set type and options "
+                              "together (encoding_options)");
+}
+
+// Options of Own's type (Own::kType) holding `own`; lower and upper empty.
+template <class Own>
+EncodingOptions encoding_options(Own own) {
+  EncodingOptions options;
+  options.type = Own::kType;
+  options.own = std::move(own);
+  return options;
+}
 
 // The linear part W of γ for an input of dimension d: B for positional and Fourier (the 2π
 // of Fourier features folded in; W = [B; B] in the module), the rows e_a for cusp, nothing
@@ -98,6 +93,10 @@ Eigen::MatrixXd encoding_matrix(const EncodingOptions& options, int input_dim);
 template <typename Scalar>
 std::unique_ptr<autodiff::Module<Scalar>> make_encoding(const EncodingOptions& options,
                                                         int input_dim);
+
+// The training stage at which the encoding's features enter (cusp's from_stage; 0: from the
+// start). Before it they are switched off (FeatureEncoding::set_features_on).
+int entry_stage(const EncodingOptions& options);
 
 // γ(x) = [x if include_input, s ⊙ σ(x Wᵀ + b)] with a fixed W (m × d), b (m), σ and
 // feature scales s (m; empty: all 1).
@@ -133,6 +132,13 @@ class FeatureEncoding final : public autodiff::Module<Scalar> {
   bool include_input_;
   bool features_on_ = true;
 };
+
+// γ(x) = [x if include_input, s ⊙ sin(x Bᵀ), s ⊙ cos(x Bᵀ)] as one FeatureEncoding, a sine
+// over [B; B] with phases [0; π/2]; s (one per row of B) empty: all 1. Positional and Fourier
+// features are this with their own B.
+template <typename Scalar>
+std::unique_ptr<autodiff::Module<Scalar>> make_sinusoids(const Eigen::MatrixXd& b, bool include_input,
+                                                         const Eigen::VectorXd& scales = {});
 
 std::vector<std::string> encoding_names();
 

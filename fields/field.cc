@@ -147,7 +147,7 @@ void Field<Scalar>::set_extra_parameters(const std::vector<double>& values) {
 
 template <typename Scalar>
 void Field<Scalar>::begin_stage(int stage) {
-  if (late_features_) late_features_->set_features_on(stage >= options_.encoding.from_stage);
+  if (late_features_) late_features_->set_features_on(stage >= entry_stage(options_.encoding));
 }
 
 template <typename Scalar>

@@ -35,11 +35,6 @@ void save_field(io::H5Writer& file, const Field<Scalar>& field, const std::strin
   file.write_attribute(group, "seed", static_cast<std::int64_t>(o.seed));
   file.write_attribute(group, "precision", std::is_same_v<Scalar, float> ? "float" : "double");
   file.write_attribute(group, "encoding_type", o.encoding.type);
-  file.write_attribute(group, "encoding_frequencies", o.encoding.frequencies);
-  file.write_attribute(group, "encoding_include_input", static_cast<std::int64_t>(o.encoding.include_input));
-  file.write_attribute(group, "encoding_features", o.encoding.features);
-  file.write_attribute(group, "encoding_scale", o.encoding.scale);
-  file.write_attribute(group, "encoding_seed", static_cast<std::int64_t>(o.encoding.seed));
   if (!o.encoding.lower.empty()) {
     file.write_attribute(group, "encoding_lower", std::span<const double>(o.encoding.lower));
     file.write_attribute(group, "encoding_upper", std::span<const double>(o.encoding.upper));
@@ -77,11 +72,6 @@ FieldOptions load_field_options(const io::H5Reader& file, const std::string& gro
   o.hidden_omega = file.read_attribute<double>(group, "hidden_omega");
   o.seed = static_cast<std::uint64_t>(file.read_attribute<std::int64_t>(group, "seed"));
   o.encoding.type = file.read_attribute<std::string>(group, "encoding_type");
-  o.encoding.frequencies = static_cast<int>(file.read_attribute<std::int64_t>(group, "encoding_frequencies"));
-  o.encoding.include_input = file.read_attribute<std::int64_t>(group, "encoding_include_input") != 0;
-  o.encoding.features = static_cast<int>(file.read_attribute<std::int64_t>(group, "encoding_features"));
-  o.encoding.scale = file.read_attribute<double>(group, "encoding_scale");
-  o.encoding.seed = static_cast<std::uint64_t>(file.read_attribute<std::int64_t>(group, "encoding_seed"));
   if (file.has_attribute(group, "encoding_lower")) {
     o.encoding.lower = file.read_attribute<std::vector<double>>(group, "encoding_lower");
     o.encoding.upper = file.read_attribute<std::vector<double>>(group, "encoding_upper");

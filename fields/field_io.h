@@ -4,11 +4,12 @@
 //
 //   /field                      group; attributes: type, input_dim, output_dim, hidden,
 //                               activation, first_omega, hidden_omega, seed, precision,
-//                               encoding_type, encoding_frequencies, encoding_include_input,
-//                               encoding_features, encoding_scale, encoding_seed,
-//                               encoding_lower, encoding_upper (when set), and each
-//                               encoding type's own (EncodingType::save: encoding_axis, …,
-//                               encoding_levels, …)
+//                               encoding_type, encoding_lower, encoding_upper (when set),
+//                               and each encoding type's own (EncodingType::save:
+//                               encoding_frequencies, encoding_features, encoding_axis, …,
+//                               encoding_levels, …; files from before 2026-11 carry
+//                               encoding_frequencies, _include_input, _features, _scale and
+//                               _seed for every type, and each type reads only its own)
 //   /field/layers/K/weight      out × in (as PyTorch's nn.Linear.weight), layer K = 0, 1, …
 //                               (dense layers only)
 //   /field/layers/K/bias        out

@@ -34,7 +34,7 @@ FeatureEncoding<Scalar>* append_coordinate_network(const FieldOptions& o, bool s
   Eigen::Index width = o.input_dim;
   if (auto encoding = make_encoding<Scalar>(o.encoding, o.input_dim)) {
     width = encoding->output_width();
-    if (o.encoding.from_stage > 0) late_features = dynamic_cast<FeatureEncoding<Scalar>*>(encoding.get());
+    if (entry_stage(o.encoding) > 0) late_features = dynamic_cast<FeatureEncoding<Scalar>*>(encoding.get());
     network.add(std::move(encoding));
   }
   for (size_t l = 0; l < o.hidden.size(); ++l) {

@@ -20,15 +20,16 @@ namespace {
 
 constexpr std::uint32_t kPrimes[kMaxDim] = {1u, 2654435761u, 805459861u, 3674653429u};
 
-bool is_smoothstep(const EncodingOptions& o) {
+bool is_smoothstep(const HashGridOptions& o) {
   return io::to_lower(o.interpolation) == "smoothstep";
 }
 
-bool is_cubic(const EncodingOptions& o) { return io::to_lower(o.interpolation) == "cubic"; }
+bool is_cubic(const HashGridOptions& o) { return io::to_lower(o.interpolation) == "cubic"; }
 
 }  // namespace
 
-std::vector<HashGridLevel> hash_grid_levels(const EncodingOptions& o, int input_dim) {
+std::vector<HashGridLevel> hash_grid_levels(const EncodingOptions& options, int input_dim) {
+  const HashGridOptions& o = own_options<HashGridOptions>(options);
   const double table = std::ldexp(1.0, o.log2_table_size);
   const double growth =
       o.levels > 1 ? std::exp((std::log(static_cast<double>(o.finest_resolution)) -
@@ -55,12 +56,12 @@ std::vector<HashGridLevel> hash_grid_levels(const EncodingOptions& o, int input_
 template <typename Scalar>
 HashGridEncoding<Scalar>::HashGridEncoding(const EncodingOptions& options, int input_dim)
     : dim_(input_dim),
-      features_(options.features_per_level),
-      smoothstep_(is_smoothstep(options)),
-      cubic_(is_cubic(options)),
+      features_(own_options<HashGridOptions>(options).features_per_level),
+      smoothstep_(is_smoothstep(own_options<HashGridOptions>(options))),
+      cubic_(is_cubic(own_options<HashGridOptions>(options))),
       bits_(cubic_ ? 2 : 1),
-      include_input_(options.include_input),
-      init_scale_(options.init_scale) {
+      include_input_(own_options<HashGridOptions>(options).include_input),
+      init_scale_(own_options<HashGridOptions>(options).init_scale) {
   if (input_dim < 1 || input_dim > kMaxDim)
     throw std::invalid_argument("hash_grid encoding: input_dim = " + std::to_string(input_dim) +
                                 ": must be in [1, 4]");
@@ -81,7 +82,7 @@ HashGridEncoding<Scalar>::HashGridEncoding(const EncodingOptions& options, int i
       level.stride[j] = info.dense ? static_cast<std::uint32_t>(stride) : 0u;
       stride *= static_cast<std::uint64_t>(info.resolution) + (cubic_ ? 4 : 2);
     }
-    level.mask = static_cast<std::uint32_t>((std::uint64_t{1} << options.log2_table_size) - 1);
+    level.mask = static_cast<std::uint32_t>((std::uint64_t{1} << own_options<HashGridOptions>(options).log2_table_size) - 1);
     grid_.push_back(level);
   }
   rows_ = levels_.back().first_row + levels_.back().rows;

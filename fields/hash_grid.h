@@ -77,6 +77,8 @@
 #include <cstdint>
 #include <memory>
 #include <random>
+#include <string>
+#include <string_view>
 #include <vector>
 
 #include "autodiff/module.h"
@@ -85,6 +87,23 @@
 namespace nfield::fields {
 
 class EncodingType;
+
+// `field.encoding: {type: hash_grid, …}`, with its defaults (checkpoint attributes:
+// encoding_KEY for each, and encoding_include_input). The box is EncodingOptions::lower/upper.
+struct HashGridOptions {
+  static constexpr std::string_view kType = "hash_grid";
+  int levels = 16;                       // L, in [1, 32]
+  int features_per_level = 2;            // F, in [1, 16]
+  int log2_table_size = 19;              // T = 2^log2_table_size entries per level, 10…24
+  int base_resolution = 16;              // N_min cells per axis on the coarsest level
+  int finest_resolution = 512;           // N_max on the finest level, ≥ N_min
+  std::string interpolation = "linear";  // linear | smoothstep | cubic
+  bool include_input = true;             // keep x itself in γ(x)
+  double init_scale = 1e-4;              // tables start U(−init_scale, init_scale)
+
+  // std::invalid_argument naming the key, its value and the rule.
+  void validate() const;
+};
 
 struct HashGridLevel {
   int resolution = 0;          // N_l: cells per box width

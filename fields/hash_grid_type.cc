@@ -37,20 +37,26 @@ const std::vector<std::string>& interpolations() {
   return names;
 }
 
-class HashGridType final : public EncodingTypeOf<HashGridType> {
+}  // namespace
+
+void HashGridOptions::validate() const {
+  check_range("levels", levels, 1, kMaxLevels);
+  check_range("features_per_level", features_per_level, 1, kMaxFeatures);
+  check_range("log2_table_size", log2_table_size, kMinLog2Table, kMaxLog2Table);
+  check_range("base_resolution", base_resolution, 1, kMaxResolution);
+  check_range("finest_resolution", finest_resolution, base_resolution, kMaxResolution);
+  if (!(init_scale > 0) || !std::isfinite(init_scale))
+    reject("init_scale", std::to_string(init_scale), "must be a finite number > 0");
+  const std::string kind = io::to_lower(interpolation);
+  if (std::find(interpolations().begin(), interpolations().end(), kind) == interpolations().end())
+    reject("interpolation", "'" + interpolation + "'", "must be linear, smoothstep or cubic");
+}
+
+namespace {
+
+class HashGridType final : public EncodingTypeOf<HashGridType, HashGridOptions> {
  public:
-  void validate(const EncodingOptions& o) const override {
-    check_range("levels", o.levels, 1, kMaxLevels);
-    check_range("features_per_level", o.features_per_level, 1, kMaxFeatures);
-    check_range("log2_table_size", o.log2_table_size, kMinLog2Table, kMaxLog2Table);
-    check_range("base_resolution", o.base_resolution, 1, kMaxResolution);
-    check_range("finest_resolution", o.finest_resolution, o.base_resolution, kMaxResolution);
-    if (!(o.init_scale > 0) || !std::isfinite(o.init_scale))
-      reject("init_scale", std::to_string(o.init_scale), "must be a finite number > 0");
-    const std::string kind = io::to_lower(o.interpolation);
-    if (std::find(interpolations().begin(), interpolations().end(), kind) == interpolations().end())
-      reject("interpolation", "'" + o.interpolation + "'", "must be linear, smoothstep or cubic");
-  }
+  void validate(const EncodingOptions& o) const override { own(o).validate(); }
   void validate_inputs(const EncodingOptions&, int input_dim) const override {
     if (input_dim < 1 || input_dim > kMaxDim)
       reject("type", "hash_grid", "takes 1 to 4 inputs, not " + std::to_string(input_dim));
@@ -60,53 +66,62 @@ class HashGridType final : public EncodingTypeOf<HashGridType> {
     return std::make_unique<HashGridEncoding<Scalar>>(o, input_dim);
   }
   void read(const io::ConfigNode& e, const EncodingContext&, EncodingOptions& o) const override {
-    if (e.has("levels")) o.levels = e.get_in_range("levels", 1, kMaxLevels);
+    HashGridOptions h;
+    if (e.has("levels")) h.levels = e.get_in_range("levels", 1, kMaxLevels);
     if (e.has("features_per_level"))
-      o.features_per_level = e.get_in_range("features_per_level", 1, kMaxFeatures);
+      h.features_per_level = e.get_in_range("features_per_level", 1, kMaxFeatures);
     if (e.has("log2_table_size"))
-      o.log2_table_size = e.get_in_range("log2_table_size", kMinLog2Table, kMaxLog2Table);
+      h.log2_table_size = e.get_in_range("log2_table_size", kMinLog2Table, kMaxLog2Table);
     if (e.has("base_resolution"))
-      o.base_resolution = e.get_in_range("base_resolution", 1, kMaxResolution);
+      h.base_resolution = e.get_in_range("base_resolution", 1, kMaxResolution);
     if (e.has("finest_resolution"))
-      o.finest_resolution = e.get_in_range("finest_resolution", 1, kMaxResolution);
-    e.require("finest_resolution", o.finest_resolution >= o.base_resolution,
-              "expected a number >= base_resolution = " + std::to_string(o.base_resolution));
-    o.interpolation = e.get_choice("interpolation", interpolations(), "linear");
-    o.include_input = e.get_or("include_input", true);
-    o.init_scale = e.get_or("init_scale", o.init_scale);
-    e.require("init_scale", o.init_scale > 0 && std::isfinite(o.init_scale),
+      h.finest_resolution = e.get_in_range("finest_resolution", 1, kMaxResolution);
+    e.require("finest_resolution", h.finest_resolution >= h.base_resolution,
+              "expected a number >= base_resolution = " + std::to_string(h.base_resolution));
+    h.interpolation = e.get_choice("interpolation", interpolations(), "linear");
+    h.include_input = e.get_or("include_input", true);
+    h.init_scale = e.get_or("init_scale", h.init_scale);
+    e.require("init_scale", h.init_scale > 0 && std::isfinite(h.init_scale),
               "expected a finite number > 0");
+    o.own = h;
   }
   void write(const EncodingOptions& o, const EncodingContext&, YAML::Node& n) const override {
-    n["levels"] = o.levels;
-    n["features_per_level"] = o.features_per_level;
-    n["log2_table_size"] = o.log2_table_size;
-    n["base_resolution"] = o.base_resolution;
-    n["finest_resolution"] = o.finest_resolution;
-    n["interpolation"] = io::to_lower(o.interpolation);
-    n["include_input"] = o.include_input;
-    n["init_scale"] = io::yaml_number(o.init_scale);
+    const HashGridOptions& h = own(o);
+    n["levels"] = h.levels;
+    n["features_per_level"] = h.features_per_level;
+    n["log2_table_size"] = h.log2_table_size;
+    n["base_resolution"] = h.base_resolution;
+    n["finest_resolution"] = h.finest_resolution;
+    n["interpolation"] = io::to_lower(h.interpolation);
+    n["include_input"] = h.include_input;
+    n["init_scale"] = io::yaml_number(h.init_scale);
   }
   void save(io::H5Writer& file, const std::string& group, const EncodingOptions& o) const override {
-    file.write_attribute(group, "encoding_levels", o.levels);
-    file.write_attribute(group, "encoding_features_per_level", o.features_per_level);
-    file.write_attribute(group, "encoding_log2_table_size", o.log2_table_size);
-    file.write_attribute(group, "encoding_base_resolution", o.base_resolution);
-    file.write_attribute(group, "encoding_finest_resolution", o.finest_resolution);
-    file.write_attribute(group, "encoding_interpolation", io::to_lower(o.interpolation));
-    file.write_attribute(group, "encoding_init_scale", o.init_scale);
+    const HashGridOptions& h = own(o);
+    file.write_attribute(group, "encoding_levels", h.levels);
+    file.write_attribute(group, "encoding_features_per_level", h.features_per_level);
+    file.write_attribute(group, "encoding_log2_table_size", h.log2_table_size);
+    file.write_attribute(group, "encoding_base_resolution", h.base_resolution);
+    file.write_attribute(group, "encoding_finest_resolution", h.finest_resolution);
+    file.write_attribute(group, "encoding_interpolation", io::to_lower(h.interpolation));
+    file.write_attribute(group, "encoding_include_input", static_cast<std::int64_t>(h.include_input));
+    file.write_attribute(group, "encoding_init_scale", h.init_scale);
   }
   void load(const io::H5Reader& file, const std::string& group, EncodingOptions& o) const override {
+    HashGridOptions h;
     auto integer = [&](const char* name) {
       return static_cast<int>(file.read_attribute<std::int64_t>(group, name));
     };
-    o.levels = integer("encoding_levels");
-    o.features_per_level = integer("encoding_features_per_level");
-    o.log2_table_size = integer("encoding_log2_table_size");
-    o.base_resolution = integer("encoding_base_resolution");
-    o.finest_resolution = integer("encoding_finest_resolution");
-    o.interpolation = file.read_attribute<std::string>(group, "encoding_interpolation");
-    o.init_scale = file.read_attribute<double>(group, "encoding_init_scale");
+    h.levels = integer("encoding_levels");
+    h.features_per_level = integer("encoding_features_per_level");
+    h.log2_table_size = integer("encoding_log2_table_size");
+    h.base_resolution = integer("encoding_base_resolution");
+    h.finest_resolution = integer("encoding_finest_resolution");
+    h.interpolation = file.read_attribute<std::string>(group, "encoding_interpolation");
+    if (file.has_attribute(group, "encoding_include_input"))
+      h.include_input = integer("encoding_include_input") != 0;
+    h.init_scale = file.read_attribute<double>(group, "encoding_init_scale");
+    o.own = h;
   }
 };
 

@@ -125,16 +125,19 @@ void IntegratedPositionalEncoding<Scalar>::backward(const autodiff::StreamLayout
 template class IntegratedPositionalEncoding<float>;
 template class IntegratedPositionalEncoding<double>;
 
+void IntegratedPositionalOptions::validate() const {
+  if (frequencies < 1 || frequencies > kMaxFrequencies)
+    throw std::invalid_argument("encoding.frequencies = " + std::to_string(frequencies) +
+                                ": must be in [1, " + std::to_string(kMaxFrequencies) + "]");
+}
+
 namespace {
 
-class IntegratedPositionalType final : public EncodingTypeOf<IntegratedPositionalType> {
+class IntegratedPositionalType final
+    : public EncodingTypeOf<IntegratedPositionalType, IntegratedPositionalOptions> {
  public:
   bool reads_variances() const override { return true; }
-  void validate(const EncodingOptions& o) const override {
-    if (o.frequencies < 1 || o.frequencies > kMaxFrequencies)
-      throw std::invalid_argument("encoding.frequencies = " + std::to_string(o.frequencies) +
-                                  ": must be in [1, " + std::to_string(kMaxFrequencies) + "]");
-  }
+  void validate(const EncodingOptions& o) const override { own(o).validate(); }
   void validate_inputs(const EncodingOptions&, int input_dim) const override {
     if (input_dim < 2 || input_dim % 2 != 0)
       throw std::invalid_argument(
@@ -144,16 +147,30 @@ class IntegratedPositionalType final : public EncodingTypeOf<IntegratedPositiona
   }
   template <typename Scalar>
   static std::unique_ptr<autodiff::Module<Scalar>> make(const EncodingOptions& o, int input_dim) {
-    return std::make_unique<IntegratedPositionalEncoding<Scalar>>(input_dim / 2, o.frequencies,
-                                                                  o.include_input);
+    return std::make_unique<IntegratedPositionalEncoding<Scalar>>(input_dim / 2, own(o).frequencies,
+                                                                  own(o).include_input);
   }
   void read(const io::ConfigNode& e, const EncodingContext&, EncodingOptions& o) const override {
-    if (e.has("frequencies")) o.frequencies = e.get_in_range("frequencies", 1, kMaxFrequencies);
-    o.include_input = e.get_or("include_input", true);
+    IntegratedPositionalOptions p;
+    if (e.has("frequencies")) p.frequencies = e.get_in_range("frequencies", 1, kMaxFrequencies);
+    p.include_input = e.get_or("include_input", true);
+    o.own = p;
   }
   void write(const EncodingOptions& o, const EncodingContext&, YAML::Node& n) const override {
-    n["frequencies"] = o.frequencies;
-    n["include_input"] = o.include_input;
+    n["frequencies"] = own(o).frequencies;
+    n["include_input"] = own(o).include_input;
+  }
+  void save(io::H5Writer& file, const std::string& group, const EncodingOptions& o) const override {
+    file.write_attribute(group, "encoding_frequencies", own(o).frequencies);
+    file.write_attribute(group, "encoding_include_input", static_cast<std::int64_t>(own(o).include_input));
+  }
+  void load(const io::H5Reader& file, const std::string& group, EncodingOptions& o) const override {
+    IntegratedPositionalOptions p;
+    if (file.has_attribute(group, "encoding_frequencies"))
+      p.frequencies = static_cast<int>(file.read_attribute<std::int64_t>(group, "encoding_frequencies"));
+    if (file.has_attribute(group, "encoding_include_input"))
+      p.include_input = file.read_attribute<std::int64_t>(group, "encoding_include_input") != 0;
+    o.own = p;
   }
 };
 

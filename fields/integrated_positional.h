@@ -47,6 +47,7 @@
 
 #include <memory>
 #include <string>
+#include <string_view>
 
 #include "autodiff/elementwise.h"
 #include "autodiff/module.h"
@@ -54,6 +55,17 @@
 namespace nfield::fields {
 
 class EncodingType;
+
+// `field.encoding: {type: integrated_positional, frequencies: 6, include_input: true}`
+// (checkpoint attributes: encoding_frequencies, encoding_include_input).
+struct IntegratedPositionalOptions {
+  static constexpr std::string_view kType = "integrated_positional";
+  int frequencies = 6;        // L, in [1, 24], as the positional encoding's
+  bool include_input = true;  // keep μ itself in γ
+
+  // std::invalid_argument naming the key, its value and the rule.
+  void validate() const;
+};
 
 template <typename Scalar>
 class IntegratedPositionalEncoding final : public autodiff::Module<Scalar> {

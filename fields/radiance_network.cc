@@ -7,6 +7,7 @@
 #include "fields/dense.h"
 #include "fields/encoding_type.h"
 #include "fields/encodings.h"
+#include "fields/positional_encoding.h"
 
 namespace nfield::fields {
 namespace {
@@ -44,10 +45,8 @@ void add_radiance_modules(const FieldOptions& options, autodiff::Sequential<Scal
   const Eigen::Index features = width;
   add_on<Scalar>(network, std::make_unique<Dense<Scalar>>(width, 1 + features), 0, width + kCarried);
   // [s, f, d] → [s, f, γ_d(d)]
-  EncodingOptions direction;
-  direction.type = "positional";
-  direction.frequencies = options.direction_frequencies;
-  direction.include_input = true;
+  const EncodingOptions direction = encoding_options(
+      PositionalOptions{.frequencies = options.direction_frequencies, .include_input = true});
   auto direction_encoding = make_encoding<Scalar>(direction, 3);
   const Eigen::Index encoded_direction = direction_encoding->output_width();
   add_on<Scalar>(network, std::move(direction_encoding), 1 + features, 1 + features + kCarried);

@@ -8,6 +8,7 @@
 
 #include "autodiff/stream_loss.h"
 #include "fields/field_io.h"
+#include "fields/positional_encoding.h"
 #include "integrators/volume_rendering.h"
 #include "io/hdf5_file.h"
 
@@ -21,8 +22,8 @@ fields::FieldOptions network_options(int sections, const SectionSamplerOptions& 
   f.input_dim = 6;
   f.output_dim = sections;
   f.hidden = options.hidden;
-  f.encoding.type = options.frequencies > 0 ? "positional" : "identity";
-  f.encoding.frequencies = options.frequencies;
+  if (options.frequencies > 0)
+    f.encoding = fields::encoding_options(fields::PositionalOptions{.frequencies = options.frequencies});
   f.seed = options.seed;
   return f;
 }

@@ -305,7 +305,7 @@ void check_meta(const RunSetup& s) {
   if (stage.optimizer != "adam" || stage.options<AdamStageOptions>().schedule != "constant")
     throw stage_node.error("optimizer", "under training.meta, stages[0] is the standard initialisation's baseline "
                                         "on the held-out instances: expected an adam stage with schedule constant");
-  if (s.training.adaptive.enabled || s.training.causal.enabled || s.training.balance.method != "fixed")
+  if (s.training.has_strategies())
     throw meta.error("training.meta takes no training strategy (adaptive, causal, balance): its inner steps "
                      "are plain gradient steps");
 }

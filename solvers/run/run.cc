@@ -14,7 +14,6 @@
 #include <nlohmann/json.hpp>
 
 #include "fields/acorn.h"
-#include "fields/encoding_type.h"
 #include "fields/field_config.h"
 #include "fields/field_io.h"
 #include "solvers/output/block_output.h"
@@ -29,6 +28,7 @@
 #include "solvers/core/problem_capabilities.h"
 #include "solvers/training/progress_printer.h"
 #include "solvers/training/trainer.h"
+#include "solvers/run/field_setup.h"
 #include "solvers/run/meta_run.h"
 #include "solvers/run/run_metrics.h"
 
@@ -295,7 +295,7 @@ void check_stage_sizes(const RunSetup& s) {
   const ProblemSize size{
       .residual_rows =
           [&] {
-            // The batch of each term, plus the RAR set for the PDE term.
+            // The batch of each term, plus the points strategies add to the PDE term (RAR).
             if (!rows) {
               const std::vector<LossTerm> terms = s.problem->loss_terms();
               Random rng(0);
@@ -304,8 +304,9 @@ void check_stage_sizes(const RunSetup& s) {
                 double points = terms[k].batch_key.empty()
                                     ? static_cast<double>(terms[k].sample(rng, 0).residual_rows())
                                     : static_cast<double>(s.training.batch.at(terms[k].batch_key));
-                if (s.training.adaptive.enabled && static_cast<int>(k) == s.problem->residual_term())
-                  points += static_cast<double>(s.training.adaptive.max_points);
+                if (static_cast<int>(k) == s.problem->residual_term())
+                  for (const auto& strategy : s.training.strategies)
+                    if (strategy->enabled()) points += static_cast<double>(strategy->extra_points());
                 *rows += points * terms[k].residual(terms[k].sample(rng, 1))->components();
               }
             }
@@ -338,60 +339,9 @@ void check_stage_sizes(const RunSetup& s) {
   }
 }
 
-// The setup of a config already parsed; `config` names it (and its folder is the default
-// data folder).
-RunSetup setup_run(io::ConfigNode root, const std::filesystem::path& config,
-                   const std::filesystem::path& out_dir_override,
-                   const std::filesystem::path& data_dir) {
-  RunSetup s{.config_path = config, .root = std::move(root)};
-  // A bare file name ("nfield run poisson.yaml") has an empty parent: its folder is ".".
-  s.data_dir = !data_dir.empty()         ? data_dir
-               : config.has_parent_path() ? config.parent_path()
-                                          : std::filesystem::path(".");
-  s.root.get_choice("problem", problem_names());
-  s.problem = make_problem({s.root, s.data_dir});
-  s.training = TrainingOptions::from_config(s.root.child_or_empty("training"));
-  (void)s.root.child_or_empty("field").has("init");  // read below, once the field's shape is known
-  s.field = fields::field_options_from_config(s.root.child_or_empty("field"),
-                                              s.problem->field_input_dim(),
-                                              s.problem->output_dim(), s.training.seed,
-                                              s.problem->domain().input_names(),
-                                              s.problem->default_sine_frequencies());
-  // Encodings that read variances beside the coordinates (integrated_positional) need a
-  // problem that gives them; it then appends them to every point it hands the field.
-  if (fields::reads_variances(s.field.encoding)) {
-    const io::ConfigNode encoding = s.root.child("field").child("encoding");
-    auto* variances = capability<TakesInputVariances>(*s.problem);
-    if (!variances)
-      throw encoding.error("type", "'" + s.field.encoding.type +
-                                       "' reads a variance beside each coordinate, and problem '" +
-                                       s.root.get<std::string>("problem") +
-                                       "' gives none (problem: nerf does: each sample's frustum)");
-    const int coordinates = s.problem->field_input_dim();
-    variances->give_input_variances();
-    const int given = s.problem->field_input_dim() - coordinates;
-    if (s.field.input_dim - coordinates != given)
-      throw encoding.error("type", "'" + s.field.encoding.type + "' on a '" + s.field.type + "' field reads " +
-                                       std::to_string(s.field.input_dim - coordinates) + " variances, problem '" +
-                                       s.root.get<std::string>("problem") + "' gives " + std::to_string(given) +
-                                       " (one per position coordinate: use field.type: nerf)");
-  }
-  // Encodings that map the domain onto a grid (hash_grid) need its box; saved with the field.
-  const Eigen::VectorXd lower = s.problem->domain().input_lower();
-  const Eigen::VectorXd upper = s.problem->domain().input_upper();
-  s.field.encoding.lower.assign(lower.data(), lower.data() + lower.size());
-  s.field.encoding.upper.assign(upper.data(), upper.data() + upper.size());
-  s.init = read_field_init(s.root.child_or_empty("field"), s.field, s.data_dir);
-  check_meta(s);
-  const auto stages = static_cast<int>(s.training.stages.size());
-  if (s.field.encoding.from_stage > 0 && s.field.encoding.from_stage >= stages)
-    throw s.root.child("field").child("encoding").error(
-        "from_stage", "expected a stage index below the number of training stages, " +
-                          std::to_string(stages) + ", or the features would never enter");
-  s.output = output_options(s.root.child_or_empty("output"), s.problem->domain(), config,
-                            out_dir_override);
-  // The batch keys are the problem's loss-term kinds: a misspelled one is an error, and the
-  // resolved config lists only those the problem draws.
+// The batch keys are the problem's loss-term kinds: a misspelled one is an error, and the
+// resolved config lists only those the problem draws.
+void check_batch_keys(RunSetup& s) {
   std::vector<std::string> batch_keys;
   for (const LossTerm& term : s.problem->loss_terms()) {
     if (term.batch_key.empty()) continue;  // draws its own points (measurements)
@@ -412,8 +362,35 @@ RunSetup setup_run(io::ConfigNode root, const std::filesystem::path& config,
   std::erase_if(s.training.batch, [&](const auto& entry) {
     return std::find(batch_keys.begin(), batch_keys.end(), entry.first) == batch_keys.end();
   });
-  check_against_problem(s.root.child_or_empty("training"), s.training.adaptive, s.training.balance,
-                        s.training.causal, *s.problem);
+}
+
+// The setup of a config already parsed; `config` names it (and its folder is the default
+// data folder).
+RunSetup setup_run(io::ConfigNode root, const std::filesystem::path& config,
+                   const std::filesystem::path& out_dir_override,
+                   const std::filesystem::path& data_dir) {
+  RunSetup s{.config_path = config, .root = std::move(root)};
+  // A bare file name ("nfield run poisson.yaml") has an empty parent: its folder is ".".
+  s.data_dir = !data_dir.empty()         ? data_dir
+               : config.has_parent_path() ? config.parent_path()
+                                          : std::filesystem::path(".");
+  s.root.get_choice("problem", problem_names());
+  s.problem = make_problem({s.root, s.data_dir});
+  s.training = TrainingOptions::from_config(s.root.child_or_empty("training"));
+  (void)s.root.child_or_empty("field").has("init");  // read below, once the field's shape is known
+  s.field = fields::field_options_from_config(s.root.child_or_empty("field"),
+                                              s.problem->field_input_dim(),
+                                              s.problem->output_dim(), s.training.seed,
+                                              s.problem->domain().input_names(),
+                                              s.problem->default_sine_frequencies());
+  fit_field_to_run(s);  // the encoding: input variances, domain box, stages
+  s.init = read_field_init(s.root.child_or_empty("field"), s.field, s.data_dir);
+  check_meta(s);
+  s.output = output_options(s.root.child_or_empty("output"), s.problem->domain(), config,
+                            out_dir_override);
+  check_batch_keys(s);
+  for (const auto& strategy : s.training.strategies)
+    if (strategy->enabled()) strategy->check(s.root.child_or_empty("training"), *s.problem);
   check_stage_sizes(s);
   s.root.child_or_empty("training").reject_unknown_keys();
   s.root.reject_unknown_keys_recursive();

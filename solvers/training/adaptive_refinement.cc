@@ -1,7 +1,11 @@
 // SPDX-License-Identifier: MIT
 #include "solvers/training/adaptive_refinement.h"
 
+#include <algorithm>
 #include <stdexcept>
+
+#include "solvers/core/problem.h"
+#include "solvers/training/strategy_settings.h"
 
 namespace nfield::solvers {
 
@@ -71,5 +75,47 @@ void AdaptiveRefinement<Scalar>::load(const io::H5Reader& file, const std::strin
 
 template class AdaptiveRefinement<float>;
 template class AdaptiveRefinement<double>;
+
+namespace {
+
+class AdaptiveSettings final : public StrategySettingsOf<AdaptiveSettings, AdaptiveOptions> {
+ public:
+  void read(const io::ConfigNode& training) override {
+    if (!training.has("adaptive")) return;
+    AdaptiveOptions& o = options;
+    const io::ConfigNode a = training.child("adaptive");
+    a.require(a.is_map(), "expected a mapping such as {every: 500, candidates: 10000, add: 100}");
+    o.enabled = true;
+    if (a.has("every")) o.every = a.get_in_range("every", 1, 1 << 30);
+    if (a.has("candidates")) o.candidates = a.get_in_range<long>("candidates", 1, 1L << 24);
+    if (a.has("add")) o.add = a.get_in_range<long>("add", 1, o.candidates);
+    a.require("add", o.add <= o.candidates, "expected add <= candidates");
+    o.max_points = a.has("max_points") ? a.get_in_range<long>("max_points", o.add, 1L << 26)
+                                       : std::max(o.max_points, o.add);
+    a.reject_unknown_keys();
+  }
+  void write(YAML::Node& n) const override {
+    if (!options.enabled) return;
+    n["adaptive"]["every"] = options.every;
+    n["adaptive"]["candidates"] = options.candidates;
+    n["adaptive"]["add"] = options.add;
+    n["adaptive"]["max_points"] = options.max_points;
+  }
+  bool enabled() const override { return options.enabled; }
+  void check(const io::ConfigNode& training, const Problem& problem) const override {
+    require_residual_term(training, "adaptive", problem);
+  }
+  long extra_points() const override { return options.enabled ? options.max_points : 0; }
+  template <typename Scalar>
+  static std::unique_ptr<TrainingStrategy<Scalar>> make(const AdaptiveOptions& o, const Problem& problem,
+                                                        const std::vector<std::string>& names) {
+    const std::size_t term = residual_term_for("adaptive", problem, names);
+    return std::make_unique<AdaptiveRefinement<Scalar>>(o, term, names[term]);
+  }
+};
+
+}  // namespace
+
+std::unique_ptr<StrategySettings> make_adaptive_settings() { return std::make_unique<AdaptiveSettings>(); }
 
 }  // namespace nfield::solvers

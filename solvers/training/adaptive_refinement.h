@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: MIT
 //
 // training.adaptive: residual-based adaptive refinement (RAR; Lu, Meng, Mao, Karniadakis
-// 2021, DeepXDE; the options in loss_balancing.h). Every `every` steps, `candidates` points
+// 2021, DeepXDE; its options in adaptive_options.h, its registry entry,
+// make_adaptive_settings, in adaptive_refinement.cc). Every `every` steps, `candidates` points
 // are drawn for the residual term, ‖r‖ is evaluated there (a forward pass, no gradient), and
 // the `add` points with the largest ‖r‖ join a persistent extra set (at most `max_points`,
 // the oldest leaving first). Each freshly drawn batch of the term is followed by the whole
@@ -19,6 +20,7 @@
 // (rays) is refused at the first join.
 #pragma once
 
+#include "solvers/training/adaptive_options.h"
 #include "solvers/training/loss_balancing.h"
 #include "solvers/training/training_strategy.h"
 

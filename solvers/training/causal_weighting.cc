@@ -1,6 +1,11 @@
 // SPDX-License-Identifier: MIT
 #include "solvers/training/causal_weighting.h"
 
+#include <stdexcept>
+
+#include "solvers/core/problem.h"
+#include "solvers/training/strategy_settings.h"
+
 namespace nfield::solvers {
 
 template <typename Scalar>
@@ -51,5 +56,46 @@ void CausalWeighting<Scalar>::load(const io::H5Reader& file, const std::string& 
 
 template class CausalWeighting<float>;
 template class CausalWeighting<double>;
+
+namespace {
+
+class CausalSettings final : public StrategySettingsOf<CausalSettings, CausalOptions> {
+ public:
+  void read(const io::ConfigNode& training) override {
+    if (!training.has("causal")) return;
+    const io::ConfigNode c = training.child("causal");
+    c.require(c.is_map(), "expected a mapping such as {epsilon: 1.0, slices: 32}");
+    options.enabled = true;
+    if (c.has("epsilon")) options.epsilon = c.get_in_range("epsilon", 0.0, 1e12);
+    if (c.has("slices")) options.slices = c.get_in_range("slices", 1, 1 << 16);
+    if (c.has("every")) options.every = c.get_in_range("every", 1, 1 << 30);
+    c.reject_unknown_keys();
+  }
+  void write(YAML::Node& n) const override {
+    if (!options.enabled) return;
+    n["causal"]["epsilon"] = io::yaml_number(options.epsilon);
+    n["causal"]["slices"] = options.slices;
+    n["causal"]["every"] = options.every;
+  }
+  bool enabled() const override { return options.enabled; }
+  void check(const io::ConfigNode& training, const Problem& problem) const override {
+    require_residual_term(training, "causal", problem);
+    if (!problem.domain().has_time())
+      throw training.error("causal", "causal weighting needs a time axis (domain.time: [t0, t1])");
+  }
+  template <typename Scalar>
+  static std::unique_ptr<TrainingStrategy<Scalar>> make(const CausalOptions& o, const Problem& problem,
+                                                        const std::vector<std::string>& names) {
+    const std::size_t term = residual_term_for("causal", problem, names);
+    const Domain& domain = problem.domain();
+    if (!domain.has_time()) throw std::invalid_argument("training.causal needs a time axis (domain.time)");
+    const auto [t0, t1] = domain.time();
+    return std::make_unique<CausalWeighting<Scalar>>(o, term, domain.time_column(), t0, t1);
+  }
+};
+
+}  // namespace
+
+std::unique_ptr<StrategySettings> make_causal_settings() { return std::make_unique<CausalSettings>(); }
 
 }  // namespace nfield::solvers

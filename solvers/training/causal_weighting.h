@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 //
-// training.causal (Wang, Sankaran, Perdikaris 2022; the formulas and options in
-// loss_balancing.h): the residual term's points are grouped into M equal slices of [t0, t1],
+// training.causal (Wang, Sankaran, Perdikaris 2022; its options in causal_options.h,
+// its registry entry, make_causal_settings, in causal_weighting.cc): the residual term's points are grouped into M equal slices of [t0, t1],
 // and point n of slice i is weighted by
 //     aₙ = N cᵢ / (M nᵢ),   cᵢ = exp(−ε Σ_{k<i} Lₖ),   Lₖ the mean ‖r‖² over slice k,
 // so that the term's loss w/N Σ aₙ ‖rₙ‖² is (w/M) Σᵢ cᵢ Lᵢ: a slice is trained once the ones
@@ -18,6 +18,7 @@
 // (trainer/causal_weights); the aₙ are recomputed from them and the points.
 #pragma once
 
+#include "solvers/training/causal_options.h"
 #include "solvers/training/loss_balancing.h"
 #include "solvers/training/training_strategy.h"
 

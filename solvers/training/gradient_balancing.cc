@@ -1,7 +1,9 @@
 // SPDX-License-Identifier: MIT
 #include "solvers/training/gradient_balancing.h"
 
+#include "solvers/core/problem.h"
 #include "solvers/training/communicator.h"
+#include "solvers/training/strategy_settings.h"
 
 namespace nfield::solvers {
 
@@ -62,5 +64,46 @@ void GradientBalancing<Scalar>::load(const io::H5Reader& file, const std::string
 
 template class GradientBalancing<float>;
 template class GradientBalancing<double>;
+
+namespace {
+
+class BalanceSettings final : public StrategySettingsOf<BalanceSettings, BalanceOptions> {
+ public:
+  void read(const io::ConfigNode& training) override {
+    if (!training.has("balance")) return;
+    if (training.has_map("balance")) {
+      const io::ConfigNode b = training.child("balance");
+      options.method = b.get_choice("method", {"fixed", "grad_norm"});
+      if (b.has("every")) options.every = b.get_in_range("every", 1, 1 << 30);
+      if (b.has("alpha")) options.alpha = b.get_in_range("alpha", 0.0, 1.0);
+      b.require("alpha", options.alpha > 0, "expected alpha in (0, 1]");
+      b.reject_unknown_keys();
+    } else {
+      options.method = training.get_choice("balance", {"fixed", "grad_norm"});
+    }
+  }
+  void write(YAML::Node& n) const override {
+    if (options.method == "fixed") {
+      n["balance"] = options.method;
+      return;
+    }
+    n["balance"]["method"] = options.method;
+    n["balance"]["every"] = options.every;
+    n["balance"]["alpha"] = io::yaml_number(options.alpha);
+  }
+  bool enabled() const override { return options.method != "fixed"; }
+  void check(const io::ConfigNode& training, const Problem& problem) const override {
+    require_residual_term(training, "balance", problem);
+  }
+  template <typename Scalar>
+  static std::unique_ptr<TrainingStrategy<Scalar>> make(const BalanceOptions& o, const Problem& problem,
+                                                        const std::vector<std::string>& names) {
+    return std::make_unique<GradientBalancing<Scalar>>(o, residual_term_for("balance", problem, names), names);
+  }
+};
+
+}  // namespace
+
+std::unique_ptr<StrategySettings> make_balance_settings() { return std::make_unique<BalanceSettings>(); }
 
 }  // namespace nfield::solvers

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: MIT
 //
 // training.balance: grad_norm (learning-rate annealing, Wang, Teng, Perdikaris 2021,
-// Algorithm 1; the options in loss_balancing.h). With gₖ the parameter gradient of term k's
+// Algorithm 1; its options in balance_options.h, its registry
+// entry, make_balance_settings, in gradient_balancing.cc). With gₖ the parameter gradient of term k's
 // loss wₖLₖ (wₖ its fixed weight), on every `every`-th Adam step
 //     λ̂ₖ = wₖ · max_θ |g_r| / mean_θ |gₖ|,     λₖ ← (1 − α) λₖ + α λ̂ₖ,
 // g_r the residual term's gradient, λ_r = 1, every λ starting at 1; the training loss is
@@ -16,6 +17,7 @@
 // grad_norm on; a checkpoint's λ of another term count is ignored.
 #pragma once
 
+#include "solvers/training/balance_options.h"
 #include "solvers/training/loss_balancing.h"
 #include "solvers/training/training_strategy.h"
 

@@ -5,88 +5,8 @@
 #include <cmath>
 #include <numeric>
 
-#include "solvers/core/problem.h"
 
 namespace nfield::solvers {
-
-AdaptiveOptions adaptive_from_config(const io::ConfigNode& training) {
-  AdaptiveOptions o;
-  if (!training.has("adaptive")) return o;
-  const io::ConfigNode a = training.child("adaptive");
-  a.require(a.is_map(), "expected a mapping such as {every: 500, candidates: 10000, add: 100}");
-  o.enabled = true;
-  if (a.has("every")) o.every = a.get_in_range("every", 1, 1 << 30);
-  if (a.has("candidates")) o.candidates = a.get_in_range<long>("candidates", 1, 1L << 24);
-  if (a.has("add")) o.add = a.get_in_range<long>("add", 1, o.candidates);
-  a.require("add", o.add <= o.candidates, "expected add <= candidates");
-  o.max_points = a.has("max_points") ? a.get_in_range<long>("max_points", o.add, 1L << 26)
-                                     : std::max(o.max_points, o.add);
-  a.reject_unknown_keys();
-  return o;
-}
-
-BalanceOptions balance_from_config(const io::ConfigNode& training) {
-  BalanceOptions o;
-  if (!training.has("balance")) return o;
-  if (training.has_map("balance")) {
-    const io::ConfigNode b = training.child("balance");
-    o.method = b.get_choice("method", {"fixed", "grad_norm"});
-    if (b.has("every")) o.every = b.get_in_range("every", 1, 1 << 30);
-    if (b.has("alpha")) o.alpha = b.get_in_range("alpha", 0.0, 1.0);
-    b.require("alpha", o.alpha > 0, "expected alpha in (0, 1]");
-    b.reject_unknown_keys();
-  } else {
-    o.method = training.get_choice("balance", {"fixed", "grad_norm"});
-  }
-  return o;
-}
-
-CausalOptions causal_from_config(const io::ConfigNode& training) {
-  CausalOptions o;
-  if (!training.has("causal")) return o;
-  const io::ConfigNode c = training.child("causal");
-  c.require(c.is_map(), "expected a mapping such as {epsilon: 1.0, slices: 32}");
-  o.enabled = true;
-  if (c.has("epsilon")) o.epsilon = c.get_in_range("epsilon", 0.0, 1e12);
-  if (c.has("slices")) o.slices = c.get_in_range("slices", 1, 1 << 16);
-  if (c.has("every")) o.every = c.get_in_range("every", 1, 1 << 30);
-  c.reject_unknown_keys();
-  return o;
-}
-
-void write_yaml(YAML::Node& n, const AdaptiveOptions& adaptive, const BalanceOptions& balance,
-                const CausalOptions& causal) {
-  if (adaptive.enabled) {
-    n["adaptive"]["every"] = adaptive.every;
-    n["adaptive"]["candidates"] = adaptive.candidates;
-    n["adaptive"]["add"] = adaptive.add;
-    n["adaptive"]["max_points"] = adaptive.max_points;
-  }
-  if (balance.method == "fixed") {
-    n["balance"] = balance.method;
-  } else {
-    n["balance"]["method"] = balance.method;
-    n["balance"]["every"] = balance.every;
-    n["balance"]["alpha"] = io::yaml_number(balance.alpha);
-  }
-  if (causal.enabled) {
-    n["causal"]["epsilon"] = io::yaml_number(causal.epsilon);
-    n["causal"]["slices"] = causal.slices;
-    n["causal"]["every"] = causal.every;
-  }
-}
-
-void check_against_problem(const io::ConfigNode& training, const AdaptiveOptions& adaptive,
-                           const BalanceOptions& balance, const CausalOptions& causal,
-                           const Problem& problem) {
-  const bool has_pde = problem.residual_term() >= 0;
-  const char* const no_pde = "this problem has no PDE residual term to act on";
-  if (adaptive.enabled && !has_pde) throw training.error("adaptive", no_pde);
-  if (balance.method == "grad_norm" && !has_pde) throw training.error("balance", no_pde);
-  if (causal.enabled && !has_pde) throw training.error("causal", no_pde);
-  if (causal.enabled && !problem.domain().has_time())
-    throw training.error("causal", "causal weighting needs a time axis (domain.time: [t0, t1])");
-}
 
 double grad_norm_target(const Eigen::Ref<const Eigen::VectorXd>& pde_gradient,
                         const Eigen::Ref<const Eigen::VectorXd>& term_gradient, double weight,

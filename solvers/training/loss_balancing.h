@@ -1,22 +1,9 @@
 // SPDX-License-Identifier: MIT
 //
-// Accuracy aids that act on the loss and on where its points lie, each optional and set in
-// the `training:` section (defaults shown; parsed here so that training_options stays small).
-// This file holds their options and the math they share; the training strategies that apply
-// them are adaptive_refinement.h, gradient_balancing.h and causal_weighting.h
-// (training_strategy.h):
-//
-//   sampler: uniform          # uniform | sobol | halton (solvers/sampling/random.h)
-//
-//   adaptive:                 # residual-based adaptive refinement (RAR); absent: off
-//     every: 500              # steps between refinements (Adam and L-BFGS)
-//     candidates: 10000       # points drawn (like the interior batch) and scored by ‖r‖
-//     add: 100                # the highest-scoring ones join a persistent extra set
-//     max_points: 2000        # size cap of the set; the oldest points leave first
-//
-//   balance: fixed            # fixed | grad_norm, or {method: grad_norm, every: 100, alpha: 0.1}
-//
-//   causal: {epsilon: 1.0, slices: 32, every: 100}   # causal weights in time; absent: off
+// The math the training strategies share, apart from their classes and options (each
+// strategy's options in its own header: adaptive_options.h, balance_options.h,
+// causal_options.h; the strategies adaptive_refinement.h, gradient_balancing.h,
+// causal_weighting.h; their registry strategy_settings.h):
 //
 // RAR (Lu, Meng, Mao, Karniadakis 2021, DeepXDE): every `every` steps, candidates are drawn
 // for the PDE term, its residual r is evaluated there (a forward pass, no gradient), and
@@ -48,46 +35,7 @@
 
 #include <Eigen/Core>
 
-#include "io/config.h"
-
 namespace nfield::solvers {
-
-class Problem;
-
-struct AdaptiveOptions {
-  bool enabled = false;
-  int every = 500;
-  long candidates = 10000;
-  long add = 100;
-  long max_points = 2000;
-};
-
-struct BalanceOptions {
-  std::string method = "fixed";  // fixed | grad_norm
-  int every = 100;
-  double alpha = 0.1;
-};
-
-struct CausalOptions {
-  bool enabled = false;
-  double epsilon = 1.0;
-  int slices = 32;
-  int every = 100;  // L-BFGS: iterations between weight updates
-};
-
-// Readers of the keys above from the `training:` mapping, and writers of their resolved
-// form (nothing for adaptive/causal when off).
-AdaptiveOptions adaptive_from_config(const io::ConfigNode& training);
-BalanceOptions balance_from_config(const io::ConfigNode& training);
-CausalOptions causal_from_config(const io::ConfigNode& training);
-void write_yaml(YAML::Node& training, const AdaptiveOptions& adaptive, const BalanceOptions& balance,
-                const CausalOptions& causal);
-
-// Checks that the problem supports what `training` asks for (a PDE term for adaptive,
-// grad_norm and causal; a time axis for causal); errors point at the key in `training`.
-void check_against_problem(const io::ConfigNode& training, const AdaptiveOptions& adaptive,
-                           const BalanceOptions& balance, const CausalOptions& causal,
-                           const Problem& problem);
 
 // λ̂ for one term from the PDE term's gradient and the term's (both of the weighted losses);
 // `weight` is the term's fixed weight. Returns `current` when the term has no gradient.

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: MIT
 #include "solvers/training/training_options.h"
 
+#include <algorithm>
+
 #include "solvers/sampling/random.h"
 
 namespace nfield::solvers {
@@ -12,6 +14,12 @@ T in_range_or(const io::ConfigNode& node, std::string_view key, T lowest, T high
 }  // namespace
 
 StageOptions::StageOptions() : settings(make_optimizer("adam")) {}
+
+bool TrainingOptions::has_strategies() const {
+  for (const auto& s : strategies)
+    if (s->enabled()) return true;
+  return false;
+}
 
 int TrainingOptions::total_steps() const {
   int total = 0;
@@ -36,9 +44,11 @@ TrainingOptions TrainingOptions::from_config(const io::ConfigNode& node) {
   o.on_divergence = node.get_choice("on_divergence", {"stop", "restore_and_halve_lr"}, o.on_divergence);
   o.divergence_retries = in_range_or(node, "divergence_retries", 1, 100, o.divergence_retries);
   o.sampler = node.get_choice("sampler", sampler_names(), o.sampler);
-  o.adaptive = adaptive_from_config(node);
-  o.balance = balance_from_config(node);
-  o.causal = causal_from_config(node);
+  for (const std::string& key : training_strategy_names()) {
+    std::unique_ptr<StrategySettings> strategy = make_strategy_settings(key);
+    strategy->read(node);
+    o.strategies.push_back(std::move(strategy));
+  }
   o.meta = meta_from_config(node);
   if (node.has("stages")) {
     const io::ConfigNode stages = node.child("stages");
@@ -79,7 +89,11 @@ YAML::Node TrainingOptions::to_yaml() const {
     n["stages"].push_back(y);
   }
   n["sampler"] = sampler;
-  write_yaml(n, adaptive, balance, causal);
+  // Sorted by key, as the resolved config always listed them.
+  std::vector<std::pair<std::string, const StrategySettings*>> sorted;
+  for (const auto& strategy : strategies) sorted.emplace_back(strategy->key, strategy.get());
+  std::sort(sorted.begin(), sorted.end());
+  for (const auto& [key, strategy] : sorted) strategy->write(n);
   write_yaml(n, meta);
   return n;
 }

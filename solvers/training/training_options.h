@@ -17,6 +17,8 @@
 //     adaptive: {every: 500, candidates: 10000, add: 100, max_points: 2000}  # RAR; absent: off
 //     balance: fixed               # fixed | grad_norm | {method: grad_norm, every: 100, alpha: 0.1}
 //     causal: {epsilon: 1.0, slices: 32, every: 100}   # causal weights in time; absent: off
+//                                  # (the training strategies: each reads its own key,
+//                                  #  solvers/training/strategy_settings.h)
 //     meta: {algorithm: reptile, steps: 1000, inner_steps: 2, …}  # solvers/training/reptile.h
 //     stages:
 //       - {optimizer: adam, steps: 2000, lr: 1.0e-3, schedule: cosine, lr_final: 1.0e-5}
@@ -42,9 +44,9 @@
 #include <vector>
 
 #include "io/config.h"
-#include "solvers/training/loss_balancing.h"
 #include "solvers/training/meta_options.h"
 #include "solvers/training/optimizer.h"
+#include "solvers/training/strategy_settings.h"
 
 namespace nfield::solvers {
 
@@ -80,15 +82,25 @@ struct TrainingOptions {
   std::string on_divergence = "stop";
   int divergence_retries = 3;
   std::vector<StageOptions> stages{StageOptions{}};
-  // Sampling and loss balancing: see solvers/sampling/random.h and solvers/loss_balancing.h.
-  std::string sampler = "uniform";
-  AdaptiveOptions adaptive;
-  BalanceOptions balance;
-  CausalOptions causal;
+  std::string sampler = "uniform";  // solvers/sampling/random.h
+  // The training strategies (solvers/training/strategy_settings.h): from a config, every
+  // registered one in hook order, each on or off as `training:` says; empty: none.
+  std::vector<std::shared_ptr<const StrategySettings>> strategies;
   // Meta-learning over a family of instances (solvers/training/reptile.h); off by default.
   MetaOptions meta;
 
   int total_steps() const;
+  // Whether any strategy is on.
+  bool has_strategies() const;
+  // The options of the strategy whose options are `Options` (AdaptiveOptions, …), or null
+  // when it is off.
+  template <class Options>
+  const Options* strategy_options() const {
+    for (const auto& s : strategies)
+      if (const auto* own = dynamic_cast<const StrategyWithOptions<Options>*>(s.get()))
+        return s->enabled() ? &own->options : nullptr;
+    return nullptr;
+  }
   static TrainingOptions from_config(const io::ConfigNode& node);
   YAML::Node to_yaml() const;
 };

@@ -1,41 +1,87 @@
 // SPDX-License-Identifier: MIT
-// The library's training strategies, made from `training:` (training_strategy.h). A new one
-// is one more `if` here, in hook order.
+// The registry of training strategies (strategy_settings.h) and make_training_strategies
+// (training_strategy.h). A new strategy is its own files and one registration line here, in
+// hook order.
 #include <stdexcept>
 
+#include "io/registry.h"
+#include "io/text.h"
 #include "solvers/core/problem.h"
-#include "solvers/training/adaptive_refinement.h"
-#include "solvers/training/causal_weighting.h"
-#include "solvers/training/gradient_balancing.h"
+#include "solvers/training/strategy_settings.h"
 #include "solvers/training/training_options.h"
 #include "solvers/training/training_strategy.h"
 
 namespace nfield::solvers {
+namespace {
+
+struct Entry {
+  std::string key;
+  StrategyFactory factory;
+};
+
+// In registration order, which is hook order.
+std::vector<Entry>& entries() {
+  static std::vector<Entry> list{{"causal", make_causal_settings},
+                                 {"balance", make_balance_settings},
+                                 {"adaptive", make_adaptive_settings}};
+  return list;
+}
+
+}  // namespace
+
+void register_training_strategy(std::string_view key, StrategyFactory factory) {
+  const std::string name = io::to_lower(key);
+  for (const Entry& e : entries())
+    if (e.key == name) throw std::logic_error("training strategy '" + name + "' registered twice");
+  entries().push_back({name, std::move(factory)});
+}
+
+std::vector<std::string> training_strategy_names() {
+  std::vector<std::string> names;
+  for (const Entry& e : entries()) names.push_back(e.key);
+  return names;
+}
+
+std::unique_ptr<StrategySettings> make_strategy_settings(std::string_view key) {
+  const std::string name = io::to_lower(key);
+  std::string valid;
+  for (const Entry& e : entries()) {
+    if (e.key == name) {
+      std::unique_ptr<StrategySettings> settings = e.factory();
+      settings->key = name;
+      return settings;
+    }
+    valid += (valid.empty() ? "" : ", ") + e.key;
+  }
+  throw UnknownNameError("unknown training strategy '" + std::string(key) + "' (valid: " + valid + ")");
+}
+
+void require_residual_term(const io::ConfigNode& training, std::string_view key,
+                           const Problem& problem) {
+  if (problem.residual_term() < 0)
+    throw training.error(key, "this problem has no PDE residual term to act on");
+}
+
+std::size_t residual_term_for(std::string_view key, const Problem& problem,
+                              const std::vector<std::string>& term_names) {
+  const int term = problem.residual_term();
+  if (term < 0 || term >= static_cast<int>(term_names.size()))
+    throw std::invalid_argument("training." + std::string(key) + " needs a PDE residual term");
+  return static_cast<std::size_t>(term);
+}
 
 template <typename Scalar>
 TrainingStrategies<Scalar> make_training_strategies(const TrainingOptions& options,
                                                     const Problem& problem,
                                                     const std::vector<std::string>& term_names) {
-  const bool causal = options.causal.enabled, balance = options.balance.method != "fixed",
-             adaptive = options.adaptive.enabled;
-  const int term = problem.residual_term();
-  if ((adaptive || causal || balance) && (term < 0 || term >= static_cast<int>(term_names.size())))
-    throw std::invalid_argument("training.adaptive, balance and causal need a PDE residual term");
-  const Domain& domain = problem.domain();
-  if (causal && !domain.has_time())
-    throw std::invalid_argument("training.causal needs a time axis (domain.time)");
   TrainingStrategies<Scalar> strategies;
-  // This order is the order of the hooks and of the figures in metrics.json.
-  if (causal) {
-    const auto [t0, t1] = domain.time();
-    strategies.push_back(std::make_unique<CausalWeighting<Scalar>>(
-        options.causal, term, domain.time_column(), t0, t1));
+  for (const auto& settings : options.strategies) {
+    if (!settings->enabled()) continue;
+    if constexpr (std::is_same_v<Scalar, float>)
+      strategies.push_back(settings->make_float(problem, term_names));
+    else
+      strategies.push_back(settings->make_double(problem, term_names));
   }
-  if (balance)
-    strategies.push_back(std::make_unique<GradientBalancing<Scalar>>(options.balance, term, term_names));
-  if (adaptive)
-    strategies.push_back(
-        std::make_unique<AdaptiveRefinement<Scalar>>(options.adaptive, term, term_names[term]));
   return strategies;
 }
 

@@ -3,9 +3,9 @@
 // Training strategies: what some runs do to the loss or to where its points lie, and others
 // not. The trainer (solvers/training/trainer.h) knows optimizers, stages, sampling and
 // checkpoints; each strategy is an object it holds and calls at fixed moments, and it knows
-// none of them by name. The library's three, made from `training:` by
-// make_training_strategies (training_strategies.cc), each act on the problem's residual
-// term, given at construction:
+// none of them by name. The library's three, each read from its own key of `training:` by its
+// registry entry (strategy_settings.h) and made by make_training_strategies
+// (training_strategies.cc), act on the problem's residual term, given at construction:
 //
 //   causal     CausalWeighting     (causal_weighting.h): per-point weights of the residual
 //                                  term, exp(−ε · loss of the earlier time slices)

@@ -181,12 +181,8 @@ TEST(ParameterGradients, EncodingInsideTheNetwork) {
     for (const std::string& activation : fields::activation_names()) {
       const std::string encoding = encoding_name;
       std::mt19937_64 rng(fnv1a(encoding + activation));
-      fields::EncodingOptions eo;
-      eo.type = encoding;
-      eo.frequencies = 2;
-      eo.features = 4;
-      eo.scale = 0.5;
-      eo.seed = 3;
+      const fields::EncodingOptions eo =
+          testutil::encoding_of(encoding, {.frequencies = 2, .features = 4, .scale = 0.5, .seed = 3});
       autodiff::Sequential<double> net({.block_points = 2, .threads = 1});
       net.add(std::make_unique<fields::Dense<double>>(2, 3));
       net.add(std::make_unique<fields::ActivationLayer<double>>(

@@ -136,11 +136,7 @@ TEST(TaylorClosedForm, EncodingsThroughIdentityNetwork) {
       o.activation = "identity";
       o.input_dim = d;
       o.hidden = {1};
-      o.encoding.type = type;
-      o.encoding.frequencies = 3;
-      o.encoding.features = 5;
-      o.encoding.scale = 0.7;
-      o.encoding.seed = 11;
+      o.encoding = testutil::encoding_of(type, {.frequencies = 3, .features = 5, .scale = 0.7, .seed = 11});
       fields::Field<double> field(o);
       field.parameters() = random_matrix(field.parameter_count(), 1, rng);
       const Eigen::MatrixXd& bm = field.encoding_matrix();

@@ -10,6 +10,7 @@
 
 #include "fields/encoding_type.h"
 #include "fields/field_io.h"
+#include "tests/testing/encoding_options.h"
 #include "tests/testing/scratch.h"
 
 namespace nfield::fields {
@@ -38,13 +39,11 @@ void expect_round_trip(const FieldOptions& options, const std::string& name) {
   const FieldOptions o = load_field_options(file);
   EXPECT_EQ(o.hidden, options.hidden);
   EXPECT_EQ(o.encoding.type, options.encoding.type);
-  EXPECT_EQ(o.encoding.normalize, options.encoding.normalize);
-  EXPECT_EQ(o.encoding.scales, options.encoding.scales);
-  if (options.encoding.type == "cusp") {
-    EXPECT_EQ(o.encoding.axis, options.encoding.axis);
-    EXPECT_EQ(o.encoding.at, options.encoding.at);
-    EXPECT_EQ(o.encoding.from_stage, options.encoding.from_stage);
-  }
+  // Every key of the encoding's own options comes back.
+  EXPECT_TRUE(testutil::any_encoding(o.encoding) == testutil::any_encoding(options.encoding))
+      << options.encoding.type;
+  EXPECT_EQ(o.encoding.lower, options.encoding.lower);
+  EXPECT_EQ(o.encoding.upper, options.encoding.upper);
   // Layout: layer 0 weight is (hidden[0], encoded input width).
   const auto shape = file.shape("field/layers/0/weight");
   ASSERT_EQ(shape.size(), 2u);
@@ -65,14 +64,21 @@ TEST(FieldIo, RoundTripIsBitExactForEveryEncodingAndPrecision) {
     options.input_dim = reads_variances(EncodingOptions{.type = encoding}) ? 4 : 3;  // [μ, σ²]
     options.output_dim = 2;
     options.hidden = {8, 6};
-    options.encoding.type = encoding;
-    options.encoding.features = 5;
-    options.encoding.axis = 1;
-    options.encoding.at = {-0.25, 0.5};
-    options.encoding.from_stage = encoding == "cusp" ? 2 : 0;
-    options.encoding.levels = 4;  // hash_grid: small tables
-    options.encoding.log2_table_size = 10;
-    options.encoding.finest_resolution = 64;
+    // Values other than the defaults, so that a key that does not come back shows.
+    options.encoding = testutil::encoding_of(encoding, {.frequencies = 3,
+                                                        .include_input = false,
+                                                        .features = 5,
+                                                        .scale = 2.5,
+                                                        .seed = 9,
+                                                        .axis = 1,
+                                                        .at = {-0.25, 0.5},
+                                                        .from_stage = encoding == "cusp" ? 2 : 0,
+                                                        .levels = 4,  // hash_grid: small tables
+                                                        .log2_table_size = 10,
+                                                        .finest_resolution = 64,
+                                                        .interpolation = "cubic",
+                                                        .init_scale = 0.25});
+    if (encoding == "hash_grid") options.encoding.lower = {-1, 0, 2}, options.encoding.upper = {1, 3, 4};
     expect_round_trip<float>(options, encoding + "_float.h5");
     expect_round_trip<double>(options, encoding + "_double.h5");
   }
@@ -84,16 +90,46 @@ TEST(FieldIo, RoundTripIsBitExactForEveryEncodingAndPrecision) {
   FieldOptions normalized;
   normalized.input_dim = 3;
   normalized.hidden = {4};
-  normalized.encoding.type = "positional";
-  normalized.encoding.normalize = true;
+  normalized.encoding = encoding_options(PositionalOptions{.normalize = true});
   expect_round_trip<double>(normalized, "positional_normalized.h5");
   FieldOptions scales;  // Fourier features in blocks of several scales
   scales.input_dim = 2;
   scales.hidden = {4};
-  scales.encoding.type = "fourier";
-  scales.encoding.features = 3;
-  scales.encoding.scales = {{1.0, 2.0}, {0.5}};
+  scales.encoding = encoding_options(FourierOptions{.features = 3, .scales = {{1.0, 2.0}, {0.5}}});
   expect_round_trip<double>(scales, "fourier_scales.h5");
+}
+
+// Files written before each encoding saved its own keys carry encoding_frequencies,
+// encoding_include_input, encoding_features, encoding_scale and encoding_seed for every type,
+// and hash_grid's include_input only among them: each type reads its own from there.
+TEST(FieldIo, ReadsFilesWithTheFormerCommonEncodingAttributes) {
+  for (const std::string& type : {"positional", "fourier", "hash_grid", "identity"}) {
+    FieldOptions options;
+    options.hidden = {4};
+    options.encoding = testutil::encoding_of(type, {.levels = 2, .log2_table_size = 10, .finest_resolution = 32});
+    const auto path = temp_file("former_" + type + ".h5");
+    {
+      io::H5Writer file(path);
+      save_field(file, Field<double>(options));
+      file.write_attribute("field", "encoding_frequencies", 3);
+      file.write_attribute("field", "encoding_include_input", std::int64_t{0});
+      file.write_attribute("field", "encoding_features", 7);
+      file.write_attribute("field", "encoding_scale", 0.5);
+      file.write_attribute("field", "encoding_seed", std::int64_t{12});
+      file.commit();
+    }
+    const FieldOptions o = load_field_options(io::H5Reader(path));
+    const testutil::AnyEncoding a = testutil::any_encoding(o.encoding);
+    ASSERT_EQ(o.encoding.type, type);
+    if (type == "positional") EXPECT_EQ(a.frequencies, 3);
+    if (type == "positional" || type == "hash_grid") EXPECT_FALSE(a.include_input) << type;
+    if (type == "fourier") {
+      EXPECT_EQ(a.features, 7);
+      EXPECT_EQ(a.scale, 0.5);
+      EXPECT_EQ(a.seed, 12u);
+    }
+    if (type == "hash_grid") EXPECT_EQ(a.levels, 2);
+  }
 }
 
 TEST(FieldIo, H5pyReadsTheLayout) {

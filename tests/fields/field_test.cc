@@ -8,7 +8,10 @@
 #include <cmath>
 #include <random>
 
+#include "fields/cusp_encoding.h"
 #include "fields/field.h"
+#include "fields/fourier_encoding.h"
+#include "fields/positional_encoding.h"
 #include "tests/testing/squares_loss.h"
 #include "tests/testing/stream_checks.h"
 
@@ -104,9 +107,7 @@ TEST(FieldCast, FloatToDoubleMatches) {
   FieldOptions o;
   o.hidden = {16, 16};
   o.output_dim = 2;
-  o.encoding.type = "fourier";
-  o.encoding.features = 6;
-  o.encoding.scale = 1.0;
+  o.encoding = encoding_options(FourierOptions{.features = 6, .scale = 1.0});
   const Field<float> f(o, {.block_points = 5, .threads = 1});
   const Field<double> d = f.cast<double>();
   EXPECT_EQ(d.parameters(), f.parameters().cast<double>());
@@ -136,11 +137,9 @@ TEST(LateCuspFeatures, ZeroWeightsAndNoGradientBeforeTheirStage) {
   o.type = "mlp";
   o.activation = "tanh";
   o.hidden = {6, 5};
-  o.encoding.type = "cusp";
-  o.encoding.axis = 1;
-  o.encoding.at = {0.5};
+  o.encoding = encoding_options(CuspOptions{.axis = 1, .at = {0.5}});
   const Field<double> from_start(o);
-  o.encoding.from_stage = 2;
+  o.encoding = encoding_options(CuspOptions{.axis = 1, .at = {0.5}, .from_stage = 2});
   Field<double> f(o);
   const DenseSlice first = dense_slices(f).at(0);
   ASSERT_EQ(first.in, 3);  // x, y, |y − 0.5|
@@ -196,17 +195,17 @@ TEST(NormalizedPositionalEncoding, ScalesOctaveLByTwoToTheMinusL) {
   o.activation = "tanh";
   o.input_dim = 2;
   o.hidden = {6};
-  o.encoding.type = "positional";
-  o.encoding.frequencies = 4;
+  const int frequencies = 4;
+  o.encoding = encoding_options(PositionalOptions{.frequencies = frequencies});
   const Field<double> plain(o);
-  o.encoding.normalize = true;
+  o.encoding = encoding_options(PositionalOptions{.frequencies = frequencies, .normalize = true});
   Field<double> normalized(o);
   normalized.parameters() = plain.parameters();
   const DenseSlice first = dense_slices(plain).front();
-  const int d = o.input_dim, m = o.encoding.frequencies * d;
+  const int d = o.input_dim, m = frequencies * d;
   ASSERT_EQ(first.in, d + 2 * m);
   Eigen::Map<Eigen::MatrixXd> w(normalized.parameters().data() + first.offset, first.out, first.in);
-  for (int l = 0; l < o.encoding.frequencies; ++l)
+  for (int l = 0; l < frequencies; ++l)
     for (int i = 0; i < d; ++i)
       for (int phase = 0; phase < 2; ++phase) w.col(d + phase * m + l * d + i) *= std::ldexp(1.0, l);
   std::mt19937_64 rng(3);

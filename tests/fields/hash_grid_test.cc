@@ -43,17 +43,24 @@ using autodiff::StreamSpec;
 using testutil::random_matrix;
 using testutil::ridders;
 
+// The hash grid's own options in `o` (its defaults put there first when it holds none).
+HashGridOptions& hg(EncodingOptions& o) {
+  if (!o.own.has_value()) o.own = HashGridOptions{};
+  return std::any_cast<HashGridOptions&>(o.own);
+}
+const HashGridOptions& hg(const EncodingOptions& o) { return own_options<HashGridOptions>(o); }
+
 EncodingOptions grid(const std::string& interpolation, int levels, int log2_table_size,
                      int base, int finest, int dim, double lo = 0, double hi = 1) {
   EncodingOptions o;
   o.type = "hash_grid";
-  o.interpolation = interpolation;
-  o.levels = levels;
-  o.features_per_level = 2;
-  o.log2_table_size = log2_table_size;
-  o.base_resolution = base;
-  o.finest_resolution = finest;
-  o.include_input = false;
+  hg(o).interpolation = interpolation;
+  hg(o).levels = levels;
+  hg(o).features_per_level = 2;
+  hg(o).log2_table_size = log2_table_size;
+  hg(o).base_resolution = base;
+  hg(o).finest_resolution = finest;
+  hg(o).include_input = false;
   o.lower.assign(dim, lo);
   o.upper.assign(dim, hi);
   o.validate(dim);
@@ -89,7 +96,7 @@ TEST(HashGridLevels, ResolutionsGrowGeometricallyAndTablesAreDenseWhileTheyFit) 
     EXPECT_EQ(levels.back().resolution, 512);
     EXPECT_EQ(levels.front().dense, true);
     EXPECT_EQ(levels.back().dense, d == 2);  // 514² fits 2^19, 514³ does not
-    o.include_input = d == 3;
+    hg(o).include_input = d == 3;
     const HashGridEncoding<float> encoding(o, d);
     EXPECT_EQ(encoding.parameter_count(), 2 * rows);
     EXPECT_EQ(encoding.output_width(), (d == 3 ? 3 : 0) + 32);
@@ -570,8 +577,8 @@ FieldOptions hash_field() {
   o.activation = "softplus";
   o.hidden = {8};
   o.encoding = grid("smoothstep", 4, 10, 4, 40, 2, -1, 1);
-  o.encoding.include_input = true;
-  o.encoding.init_scale = 0.25;
+  hg(o.encoding).include_input = true;
+  hg(o.encoding).init_scale = 0.25;
   return o;
 }
 
@@ -604,13 +611,13 @@ TEST(HashGridField, SaveLoadRoundTripIsBitExact) {
       const io::H5Reader file(path);
       const FieldOptions o = load_field_options(file);
       EXPECT_EQ(o.encoding.type, "hash_grid");
-      EXPECT_EQ(o.encoding.levels, 4);
-      EXPECT_EQ(o.encoding.log2_table_size, 10);
-      EXPECT_EQ(o.encoding.base_resolution, 4);
-      EXPECT_EQ(o.encoding.finest_resolution, 40);
-      EXPECT_EQ(o.encoding.interpolation, "smoothstep");
-      EXPECT_EQ(o.encoding.init_scale, 0.25);
-      EXPECT_TRUE(o.encoding.include_input);
+      EXPECT_EQ(hg(o.encoding).levels, 4);
+      EXPECT_EQ(hg(o.encoding).log2_table_size, 10);
+      EXPECT_EQ(hg(o.encoding).base_resolution, 4);
+      EXPECT_EQ(hg(o.encoding).finest_resolution, 40);
+      EXPECT_EQ(hg(o.encoding).interpolation, "smoothstep");
+      EXPECT_EQ(hg(o.encoding).init_scale, 0.25);
+      EXPECT_TRUE(hg(o.encoding).include_input);
       EXPECT_EQ(o.encoding.lower, (std::vector<double>{-1, -1}));
       EXPECT_EQ(o.encoding.upper, (std::vector<double>{1, 1}));
       const Field<Scalar> loaded = load_field<Scalar>(file);
@@ -655,24 +662,24 @@ FieldOptions read(const std::string& text) {
 TEST(HashGridConfig, KeysAreReadAndWrittenBack) {
   const FieldOptions o = read(kConfig);
   EXPECT_EQ(o.encoding.type, "hash_grid");
-  EXPECT_EQ(o.encoding.levels, 6);
-  EXPECT_EQ(o.encoding.features_per_level, 4);
-  EXPECT_EQ(o.encoding.log2_table_size, 12);
-  EXPECT_EQ(o.encoding.base_resolution, 8);
-  EXPECT_EQ(o.encoding.finest_resolution, 64);
-  EXPECT_EQ(o.encoding.interpolation, "smoothstep");
-  EXPECT_FALSE(o.encoding.include_input);
-  EXPECT_EQ(o.encoding.init_scale, 0.01);
+  EXPECT_EQ(hg(o.encoding).levels, 6);
+  EXPECT_EQ(hg(o.encoding).features_per_level, 4);
+  EXPECT_EQ(hg(o.encoding).log2_table_size, 12);
+  EXPECT_EQ(hg(o.encoding).base_resolution, 8);
+  EXPECT_EQ(hg(o.encoding).finest_resolution, 64);
+  EXPECT_EQ(hg(o.encoding).interpolation, "smoothstep");
+  EXPECT_FALSE(hg(o.encoding).include_input);
+  EXPECT_EQ(hg(o.encoding).init_scale, 0.01);
   YAML::Node root;
   root["field"] = to_yaml(o);
   const FieldOptions again = read(io::to_yaml(root));
   EXPECT_EQ(io::to_yaml(root["field"]), io::to_yaml(to_yaml(again)));
   // Defaults.
   const FieldOptions d = read("field: {type: mlp, encoding: {type: hash_grid}}\n");
-  EXPECT_EQ(d.encoding.levels, 16);
-  EXPECT_EQ(d.encoding.log2_table_size, 19);
-  EXPECT_EQ(d.encoding.interpolation, "linear");
-  EXPECT_TRUE(d.encoding.include_input);
+  EXPECT_EQ(hg(d.encoding).levels, 16);
+  EXPECT_EQ(hg(d.encoding).log2_table_size, 19);
+  EXPECT_EQ(hg(d.encoding).interpolation, "linear");
+  EXPECT_TRUE(hg(d.encoding).include_input);
 }
 
 void expect_error(const std::string& text, int line, const std::string& key,
@@ -718,11 +725,11 @@ TEST(HashGridOptions, ValidationNamesTheOptionAndTheRule) {
     }
     return std::string();
   };
-  o.log2_table_size = 30;
+  hg(o).log2_table_size = 30;
   EXPECT_NE(message().find("encoding.log2_table_size = 30: must be in [10, 24]"), std::string::npos);
   o = {};
   o.type = "hash_grid";
-  o.interpolation = "quintic";
+  hg(o).interpolation = "quintic";
   EXPECT_NE(message().find("encoding.interpolation = 'quintic': must be linear, smoothstep or cubic"),
             std::string::npos) << message();
   o = {};

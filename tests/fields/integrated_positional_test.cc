@@ -21,7 +21,9 @@
 #include "fields/encoding_type.h"
 #include "fields/field.h"
 #include "fields/integrated_positional.h"
+#include "fields/positional_encoding.h"
 #include "fields/radiance_network.h"
+#include "tests/testing/encoding_options.h"
 
 namespace nfield::fields {
 namespace {
@@ -51,11 +53,9 @@ Eigen::MatrixXd uniform(Eigen::Index rows, Eigen::Index cols, double lo, double 
 template <typename Scalar>
 void expect_positional_at_zero_variance() {
   const int k = 3, frequencies = 10;
-  EncodingOptions positional;
-  positional.type = "positional";
-  positional.frequencies = frequencies;
-  EncodingOptions integrated = positional;
-  integrated.type = "integrated_positional";
+  const EncodingOptions positional = encoding_options(PositionalOptions{.frequencies = frequencies});
+  const EncodingOptions integrated =
+      encoding_options(IntegratedPositionalOptions{.frequencies = frequencies});
   const auto plain = make_encoding<Scalar>(positional, k);
   const auto ipe = make_encoding<Scalar>(integrated, 2 * k);
   ASSERT_EQ(ipe->input_width(), 2 * k);
@@ -87,8 +87,7 @@ FieldOptions nerf_options(const std::string& encoding) {
   o.output_dim = kRadianceOutputs;
   o.hidden = {32, 32};
   o.color_hidden = {16};
-  o.encoding.type = encoding;
-  o.encoding.frequencies = 10;
+  o.encoding = testutil::encoding_of(encoding, {.frequencies = 10});
   o.seed = 9;
   return o;
 }
@@ -168,7 +167,7 @@ TEST(IntegratedPositional, RegisteredAndReadsVariances) {
   EXPECT_FALSE(reads_variances(o));
   o.type = "integrated_positional";
   EXPECT_THROW(o.validate(3), std::invalid_argument);  // an odd input: no [μ, σ²] split
-  o.frequencies = 25;
+  o = encoding_options(IntegratedPositionalOptions{.frequencies = 25});
   EXPECT_THROW(o.validate(), std::invalid_argument);
   FieldOptions nerf = nerf_options("integrated_positional");
   nerf.input_dim = 6;  // a nerf field with it takes [x, d, σ²]

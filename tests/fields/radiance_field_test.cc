@@ -14,6 +14,7 @@
 #include "fields/dense.h"
 #include "fields/field_io.h"
 #include "fields/radiance_network.h"
+#include "tests/testing/encoding_options.h"
 #include "tests/testing/squares_loss.h"
 #include "tests/testing/scratch.h"
 
@@ -29,8 +30,7 @@ FieldOptions small_nerf(const std::string& encoding = "positional") {
   o.hidden = {12, 10};
   o.color_hidden = {7};
   o.direction_frequencies = 2;
-  o.encoding.type = encoding;
-  o.encoding.frequencies = 3;
+  o.encoding = testutil::encoding_of(encoding, {.frequencies = 3});
   o.seed = 4;
   return o;
 }

@@ -13,8 +13,13 @@
 #include <string>
 
 #include "fields/activations.h"
+#include "fields/cusp_encoding.h"
+#include "fields/encoding_type.h"
 #include "fields/encodings.h"
+#include "fields/fourier_encoding.h"
 #include "fields/field.h"
+#include "fields/positional_encoding.h"
+#include "io/config.h"
 #include "io/registry.h"
 #include "io/text.h"
 
@@ -74,66 +79,85 @@ TEST(EncodingRegistry, UnknownNameListsValidNames) {
 }
 
 TEST(EncodingRegistry, NamesAreCaseInsensitive) {
-  EncodingOptions o;
+  EncodingOptions o = encoding_options(PositionalOptions{.frequencies = 2});
   o.type = "PosItional";
-  o.frequencies = 2;
   EXPECT_NO_THROW(o.validate());
   const Eigen::MatrixXd b = encoding_matrix(o, 2);
   ASSERT_EQ(b.rows(), 4);
   EXPECT_DOUBLE_EQ(b(3, 1), 2 * std::numbers::pi);  // row l·d + i holds 2ˡ π eᵢ
+  o = encoding_options(FourierOptions{.features = 5});
   o.type = "FOURIER";
-  o.features = 5;
   EXPECT_EQ(encoding_matrix(o, 3).rows(), 5);
+  o.own.reset();
   o.type = "Identity";
   EXPECT_EQ(encoding_matrix(o, 3).rows(), 0);
 }
 
 TEST(EncodingOptions, ValidationNamesTheField) {
-  EncodingOptions o;
-  o.type = "positional";
-  o.frequencies = 0;
-  EXPECT_NE(message_of([&] { o.validate(); }).find("encoding.frequencies"), std::string::npos);
-  o = {};
-  o.type = "fourier";
-  o.features = 0;
+  EncodingOptions o = encoding_options(PositionalOptions{.frequencies = 0});
+  EXPECT_NE(message_of([&] { o.validate(); }).find("encoding.frequencies = 0"), std::string::npos);
+  o = encoding_options(FourierOptions{.features = 0});
   EXPECT_NE(message_of([&] { o.validate(); }).find("encoding.features"), std::string::npos);
-  o.features = 4;
-  o.scale = 0;
+  o = encoding_options(FourierOptions{.features = 4, .scale = 0});
   EXPECT_NE(message_of([&] { o.validate(); }).find("encoding.scale"), std::string::npos);
   o = {};
-  o.type = "cusp";
+  o.type = "cusp";  // its defaults: no plane
   EXPECT_NE(message_of([&] { o.validate(); }).find("encoding.at = []"), std::string::npos);
-  o.at = {0.5};
-  o.axis = 2;
+  o = encoding_options(CuspOptions{.axis = 2, .at = {0.5}});
   EXPECT_NO_THROW(o.validate());
   EXPECT_NE(message_of([&] { encoding_matrix(o, 2); }).find("encoding.axis = 2"), std::string::npos);
   FieldOptions f;
   f.encoding = o;
   EXPECT_NE(message_of([&] { f.validate(); }).find("encoding.axis"), std::string::npos);
-  o.axis = 1;
-  o.from_stage = -1;
+  o = encoding_options(CuspOptions{.axis = 1, .at = {0.5}, .from_stage = -1});
   EXPECT_NE(message_of([&] { o.validate(); }).find("encoding.from_stage = -1: must be >= 0"),
             std::string::npos);
-  o.from_stage = 1;
+  o = encoding_options(CuspOptions{.axis = 1, .at = {0.5}, .from_stage = 1});
   EXPECT_NO_THROW(o.validate());
+  EXPECT_EQ(entry_stage(o), 1);
+  // The holder keeps one type's struct: a type that finds another's refuses it by name.
   o.type = "fourier";
-  EXPECT_NE(message_of([&] { o.validate(); }).find("only cusp features"), std::string::npos);
+  const std::string message = message_of([&] { o.validate(); });
+  EXPECT_NE(message.find("encoding.type = fourier: its options hold another encoding's"), std::string::npos)
+      << message;
+  EXPECT_EQ(entry_stage(encoding_options(FourierOptions{})), 0);
+}
+
+// What the run tells an encoding (fit_encoding): every type keeps the domain box; cusp
+// refuses a from_stage the run does not reach, at the key; the others take any stage count.
+TEST(EncodingOptions, FitToTheRunKeepsTheBoxAndChecksTheStages) {
+  const io::ConfigNode node = io::parse_config(
+      "type: cusp\naxis: y\nat: [0.5]\nfrom_stage: 2\n", "encoding.yaml");
+  const EncodingRun run{.lower = {0, -1}, .upper = {1, 1}, .stages = 2};
+  EncodingOptions cusp = encoding_options(CuspOptions{.axis = 1, .at = {0.5}, .from_stage = 2});
+  std::string message;
+  try {
+    fit_encoding(node, run, cusp);
+  } catch (const io::ConfigError& e) {
+    message = e.what();
+  }
+  EXPECT_NE(message.find("encoding.yaml:4"), std::string::npos) << message;
+  EXPECT_NE(message.find("from_stage"), std::string::npos) << message;
+  EXPECT_NE(message.find("below the number of training stages, 2"), std::string::npos) << message;
+  cusp = encoding_options(CuspOptions{.axis = 1, .at = {0.5}, .from_stage = 1});
+  fit_encoding(node, run, cusp);
+  EXPECT_EQ(cusp.lower, run.lower);
+  EXPECT_EQ(cusp.upper, run.upper);
+  EncodingOptions plain;  // identity
+  fit_encoding(node, {.lower = {2}, .upper = {3}, .stages = 1}, plain);
+  EXPECT_EQ(plain.lower, std::vector<double>{2});
 }
 
 // Fourier features in blocks (`scales`): one block at σ is the matrix of `scale: σ` (the same
 // draws), each block's column a has the spread 2π σ_ga, and a block needs one σ or one per axis.
 TEST(EncodingOptions, FourierScalesStackBlocksWithOneSigmaPerAxis) {
-  EncodingOptions one;
-  one.type = "fourier";
-  one.features = 16;
-  one.scale = 3.0;
-  one.seed = 7;
-  EncodingOptions blocks = one;
+  const FourierOptions one{.features = 16, .scale = 3.0, .seed = 7};
+  FourierOptions blocks = one;
   blocks.scales = {{3.0}};
-  EXPECT_EQ(encoding_matrix(blocks, 2), encoding_matrix(one, 2));
+  EXPECT_EQ(encoding_matrix(encoding_options(blocks), 2), encoding_matrix(encoding_options(one), 2));
   blocks.features = 4000;
   blocks.scales = {{1.0, 1.0}, {1.0, 10.0}};
-  const Eigen::MatrixXd b = encoding_matrix(blocks, 2);
+  const Eigen::MatrixXd b = encoding_matrix(encoding_options(blocks), 2);
   ASSERT_EQ(b.rows(), 8000);
   const double sigma[2][2] = {{1, 1}, {1, 10}};
   for (int g = 0; g < 2; ++g)
@@ -143,17 +167,15 @@ TEST(EncodingOptions, FourierScalesStackBlocksWithOneSigmaPerAxis) {
       EXPECT_NEAR(spread / (2 * std::numbers::pi * sigma[g][a]), 1.0, 0.05) << g << " " << a;
     }
   blocks.scales = {{1.0, 2.0, 3.0}};
-  EXPECT_NE(message_of([&] { blocks.validate(2); }).find("encoding.scales[0] = 3 values"), std::string::npos);
+  EXPECT_NE(message_of([&] { encoding_options(blocks).validate(2); }).find("encoding.scales[0] = 3 values"),
+            std::string::npos);
   blocks.scales = {{1.0, -2.0}};
-  EXPECT_NE(message_of([&] { blocks.validate(); }).find("encoding.scales[0]"), std::string::npos);
+  EXPECT_NE(message_of([&] { encoding_options(blocks).validate(); }).find("encoding.scales[0]"), std::string::npos);
 }
 
 // Cusp features: [x, |x_a − c_k|] with value, sign derivative and no curvature, by hand.
 TEST(EncodingOptions, CuspFeaturesAreDistancesToThePlanes) {
-  EncodingOptions o;
-  o.type = "cusp";
-  o.axis = 1;
-  o.at = {0.5, -0.25};
+  const EncodingOptions o = encoding_options(CuspOptions{.axis = 1, .at = {0.5, -0.25}});
   const auto encoding = make_encoding<double>(o, 2);
   ASSERT_NE(encoding, nullptr);
   ASSERT_EQ(encoding->output_width(), 4);
@@ -199,8 +221,8 @@ TEST(FieldRegistry, NamesAreCaseInsensitive) {
   EXPECT_NO_THROW(Field<double>{o});
   o.type = "Mlp";
   o.activation = "SiNe";
+  o.encoding = encoding_options(FourierOptions{.features = 3});
   o.encoding.type = "Fourier";
-  o.encoding.features = 3;
   const Field<double> f(o);
   EXPECT_EQ(f.encoding_matrix().rows(), 3);
 }
@@ -232,8 +254,7 @@ TEST(FieldOptions, ValidationNamesTheField) {
   o.hidden_omega = -1;
   expect_field(o, "field.hidden_omega");
   o = {};
-  o.encoding.type = "positional";
-  o.encoding.frequencies = 30;
+  o.encoding = encoding_options(PositionalOptions{.frequencies = 30});
   expect_field(o, "encoding.frequencies");
 }
 

@@ -7,7 +7,7 @@
 //
 // Layout read (fields/field.h, fields/dense.h, fields/encodings.h):
 //   encoding   [x if positional and include_input, sin(x Bᵀ), cos(x Bᵀ)], B = encoding_matrix()
-//              cusp: [x, |x_a − c_k| for the planes c_k of options.encoding.at]
+//              cusp: [x, |x_a − c_k| for the planes c_k of the cusp options' at]
 //              integrated_positional: input [μ (k), σ² (k)], k = d/2: [μ if include_input,
 //              sin(2ˡπ μᵢ) e^{−4ˡπ²σᵢ²/2} for l < L, i < k (octave-major), then the same with
 //              cos], written here from the definition in fields/integrated_positional.h
@@ -47,6 +47,7 @@
 #include "fields/field.h"
 #include "fields/hash_grid.h"
 #include "io/text.h"
+#include "tests/testing/encoding_options.h"
 
 namespace nfield::testutil {
 
@@ -215,20 +216,20 @@ class ReferenceField {
     cusp_ = io::to_lower(options_.encoding.type) == "cusp";
     hash_ = io::to_lower(options_.encoding.type) == "hash_grid";
     integrated_ = io::to_lower(options_.encoding.type) == "integrated_positional";
-    include_input_ = hash_ || integrated_ ? options_.encoding.include_input
+    include_input_ = hash_ || integrated_ ? keys_.include_input
                            : encoding_.rows() == 0 || cusp_ ||
                                  (io::to_lower(options_.encoding.type) == "positional" &&
-                                  options_.encoding.include_input);
+                                  keys_.include_input);
     Eigen::Index width = (include_input_ ? options_.input_dim : 0) +
                          (cusp_ ? 1 : 2) * encoding_.rows();
     Eigen::Index count = 0;
     if (integrated_) {
       const Eigen::Index k = options_.input_dim / 2;
-      width = (include_input_ ? k : 0) + 2 * options_.encoding.frequencies * k;
+      width = (include_input_ ? k : 0) + 2 * keys_.frequencies * k;
     }
     if (hash_) {
       levels_ = fields::hash_grid_levels(options_.encoding, options_.input_dim);
-      const Eigen::Index f = options_.encoding.features_per_level;
+      const Eigen::Index f = keys_.features_per_level;
       width = (include_input_ ? options_.input_dim : 0) + static_cast<Eigen::Index>(levels_.size()) * f;
       count = (levels_.back().first_row + levels_.back().rows) * f;
       table_count_ = count;
@@ -355,7 +356,7 @@ class ReferenceField {
       const int k = d / 2;
       if (include_input_) a.resize(k);
       std::vector<T> sines, cosines;
-      for (int l = 0; l < options_.encoding.frequencies; ++l)
+      for (int l = 0; l < keys_.frequencies; ++l)
         for (int i = 0; i < k; ++i) {
           const double omega = std::ldexp(std::numbers::pi, l);
           const T damping = exp(constant<T>(-0.5 * omega * omega) * x[k + i]);
@@ -366,8 +367,8 @@ class ReferenceField {
       a.insert(a.end(), cosines.begin(), cosines.end());
     } else if (cusp_) {
       // Written from the definition, not from encoding_matrix(): |x_a − c|.
-      for (double c : options_.encoding.at) {
-        const T z = x[options_.encoding.axis] - constant<T>(c);
+      for (double c : keys_.at) {
+        const T z = x[keys_.axis] - constant<T>(c);
         if (pre) pre->push_back(value_of(z));
         a.push_back(value_of(z) < 0 ? -z : z);
       }
@@ -416,8 +417,8 @@ class ReferenceField {
   std::vector<T> hash_grid(const std::vector<T>& x, std::vector<double>* pre) const {
     static constexpr std::uint32_t kPrimes[4] = {1u, 2654435761u, 805459861u, 3674653429u};
     const fields::EncodingOptions& e = options_.encoding;
-    const int d = options_.input_dim, features = e.features_per_level;
-    const std::string kind = io::to_lower(e.interpolation);
+    const int d = options_.input_dim, features = keys_.features_per_level;
+    const std::string kind = io::to_lower(keys_.interpolation);
     const bool smooth = kind == "smoothstep", cubic = kind == "cubic";
     const int taps = cubic ? 4 : 2;
     std::vector<T> out;
@@ -469,7 +470,7 @@ class ReferenceField {
           hash ^= static_cast<std::uint32_t>(vertex) * kPrimes[j];
         }
         const std::uint64_t row =
-            level.dense ? dense_row : hash % (std::uint64_t{1} << e.log2_table_size);
+            level.dense ? dense_row : hash % (std::uint64_t{1} << keys_.log2_table_size);
         for (int f = 0; f < features; ++f)
           y[f] = y[f] + w * constant<T>(parameters_[(level.first_row + row) * features + f]);
       }
@@ -479,6 +480,7 @@ class ReferenceField {
   }
 
   fields::FieldOptions options_;
+  AnyEncoding keys_ = any_encoding(options_.encoding);  // the encoding's own options
   Eigen::VectorXd parameters_;
   Eigen::MatrixXd encoding_;
   std::vector<Eigen::MatrixXd> omega_;  // bacon's filter frequencies

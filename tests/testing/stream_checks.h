@@ -317,20 +317,20 @@ inline fields::FieldOptions small_options(const NetworkCase& c, int input_dim, i
   o.output_dim = output_dim;
   o.hidden = std::move(hidden);
   if (c.type != "siren") o.hidden_omega = 2.0;
-  o.encoding.type = c.encoding;
-  o.encoding.frequencies = 3;
-  o.encoding.features = 8;
-  o.encoding.scale = 1.0;
-  o.encoding.seed = seed + 17;
-  o.encoding.axis = input_dim - 1;
-  o.encoding.at = {-0.3, 0.45};
-  o.encoding.levels = 3;
-  o.encoding.features_per_level = 2;
-  o.encoding.log2_table_size = 10;
-  o.encoding.base_resolution = 2;
-  o.encoding.finest_resolution = 6;
-  o.encoding.interpolation = c.variant.empty() ? "smoothstep" : c.variant;
-  o.encoding.init_scale = 0.5;  // features of order 1, as after training
+  o.encoding = encoding_of(c.encoding, {.frequencies = 3,
+                                         .features = 8,
+                                         .scale = 1.0,
+                                         .seed = seed + 17,
+                                         .axis = input_dim - 1,
+                                         .at = {-0.3, 0.45},
+                                         .levels = 3,
+                                         .features_per_level = 2,
+                                         .log2_table_size = 10,
+                                         .base_resolution = 2,
+                                         .finest_resolution = 6,
+                                         .interpolation = c.variant.empty() ? "smoothstep" : c.variant,
+                                         // features of order 1, as after training
+                                         .init_scale = 0.5});
   // One bound per coordinate: an encoding that reads variances has input_dim / 2 of them.
   const int coordinates = fields::encoding_type(c.encoding).reads_variances() ? input_dim / 2 : input_dim;
   o.encoding.lower.assign(coordinates, -1.0);

@@ -19,6 +19,7 @@
 
 #include "autodiff/sequential.h"
 #include "fields/field.h"
+#include "fields/positional_encoding.h"
 #include "integrators/volume_rendering.h"
 #include "io/hdf5_file.h"
 #include "io/png_image.h"
@@ -56,9 +57,7 @@ fields::Field<double> random_integral_field() {
   options.output_dim = 4;
   options.hidden = {24, 24};
   options.color_hidden = {12};
-  options.encoding.type = "positional";
-  options.encoding.frequencies = 5;
-  options.encoding.normalize = true;
+  options.encoding = fields::encoding_options(fields::PositionalOptions{.frequencies = 5, .normalize = true});
   options.seed = 11;
   fields::Field<double> field(options);
   field.initialize();

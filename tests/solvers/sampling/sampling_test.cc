@@ -16,6 +16,7 @@
 
 #include "fields/field_io.h"
 #include "io/hdf5_file.h"
+#include "solvers/training/adaptive_options.h"
 #include "solvers/training/loss_balancing.h"
 #include "solvers/run/run.h"
 #include "solvers/sampling/random.h"
@@ -456,7 +457,8 @@ TEST(SamplingConfig, ResolvedConfigKeepsTheKeys) {
   EXPECT_NE(defaults.find("sampler: uniform"), std::string::npos);
   EXPECT_NE(defaults.find("balance: fixed"), std::string::npos);
   EXPECT_EQ(defaults.find("causal"), std::string::npos);
-  EXPECT_FALSE(plain.training.adaptive.enabled);
+  EXPECT_EQ(plain.training.strategy_options<AdaptiveOptions>(), nullptr);
+  EXPECT_FALSE(plain.training.has_strategies());
 }
 
 }  // namespace

@@ -3,8 +3,8 @@
 // The training strategies (solvers/training/training_strategy.h) one at a time, on terms
 // made up here instead of a trainer's: grad_norm's moving average of λ against a hand
 // computation, the causal weights of a toy residual, RAR's extra set as it is refined, joined
-// and capped; each one's checkpoint round trip. The runs through the trainer are in
-// sampling_test.cc.
+// and capped; each one's checkpoint round trip; the registry of strategies (each reads its
+// own key of `training:`). The runs through the trainer are in sampling_test.cc.
 #include <gtest/gtest.h>
 
 #include <climits>
@@ -13,10 +13,13 @@
 #include <stdexcept>
 
 #include "io/hdf5_file.h"
+#include "io/registry.h"
 #include "solvers/training/adaptive_refinement.h"
 #include "solvers/training/causal_weighting.h"
 #include "solvers/training/communicator.h"
 #include "solvers/training/gradient_balancing.h"
+#include "solvers/training/strategy_settings.h"
+#include "solvers/training/training_options.h"
 #include "tests/testing/scratch.h"
 
 namespace nfield::solvers {
@@ -255,6 +258,51 @@ TEST(AdaptiveRefinement, SetIsRefinedJoinedAndCapped) {
   AdaptiveRefinement<double> resumed(options, 0, "pde");
   round_trip(adaptive, resumed);
   EXPECT_EQ(resumed.points(), adaptive.points());
+}
+
+// The registry: hook order, one settings object per key that reads its own options, and
+// what the run learns of a strategy without its name (the points it adds).
+TEST(StrategyRegistry, EachStrategyReadsItsOwnKeyInHookOrder) {
+  const std::vector<std::string> names = training_strategy_names();
+  ASSERT_GE(names.size(), 3u);
+  EXPECT_EQ(std::vector<std::string>(names.begin(), names.begin() + 3),
+            (std::vector<std::string>{"causal", "balance", "adaptive"}));
+  const TrainingOptions off = TrainingOptions::from_config(io::parse_config("seed: 1\n", "off.yaml"));
+  ASSERT_EQ(off.strategies.size(), names.size());
+  EXPECT_FALSE(off.has_strategies());
+  for (const auto& s : off.strategies) EXPECT_EQ(s->extra_points(), 0) << s->key;
+
+  const TrainingOptions on = TrainingOptions::from_config(io::parse_config(
+      "adaptive: {every: 5, candidates: 500, add: 10, max_points: 25}\n"
+      "balance: {method: grad_norm, every: 3, alpha: 0.3}\n",
+      "on.yaml"));
+  EXPECT_TRUE(on.has_strategies());
+  ASSERT_NE(on.strategy_options<AdaptiveOptions>(), nullptr);
+  EXPECT_EQ(on.strategy_options<AdaptiveOptions>()->max_points, 25);
+  ASSERT_NE(on.strategy_options<BalanceOptions>(), nullptr);
+  EXPECT_EQ(on.strategy_options<BalanceOptions>()->alpha, 0.3);
+  EXPECT_EQ(on.strategy_options<CausalOptions>(), nullptr);  // off
+  long extra = 0;
+  for (const auto& s : on.strategies) extra += s->extra_points();
+  EXPECT_EQ(extra, 25);
+  // Written back under their keys, and read again alike.
+  const YAML::Node written = on.to_yaml();
+  EXPECT_EQ(written["adaptive"]["max_points"].as<long>(), 25);
+  EXPECT_EQ(written["balance"]["method"].as<std::string>(), "grad_norm");
+  EXPECT_FALSE(written["causal"]);
+}
+
+TEST(StrategyRegistry, UnknownKeysListTheValidOnesAndKeysAreNotTakenTwice) {
+  try {
+    make_strategy_settings("annealing");
+    FAIL() << "no error";
+  } catch (const UnknownNameError& e) {
+    const std::string message = e.what();
+    for (const char* name : {"causal", "balance", "adaptive"})
+      EXPECT_NE(message.find(name), std::string::npos) << message;
+  }
+  EXPECT_EQ(make_strategy_settings("Causal")->key, "causal");  // case-insensitive
+  EXPECT_THROW(register_training_strategy("balance", make_balance_settings), std::logic_error);
 }
 
 }  // namespace
