@@ -44,30 +44,9 @@
 
 #include <Eigen/Core>
 
+#include "io/expression_error.h"
+
 namespace nfield::io {
-
-// A malformed expression or an unknown name. what() is
-//   in expression 'sin(pi*q)': Unexpected token "q" found at position 7.
-// position() is the 0-based offset of the offending character (as in muparser's
-// message), so a config reader can turn it into a file column.
-class ExpressionError : public std::runtime_error {
- public:
-  ExpressionError(std::string expression, std::size_t position, std::string reason);
-
-  const std::string& expression() const { return expression_; }
-  // 0-based; std::string::npos when muparser gives none.
-  std::size_t position() const { return position_; }
-  // muparser's message alone.
-  const std::string& reason() const { return reason_; }
-
- private:
-  std::string expression_;
-  std::size_t position_;
-  std::string reason_;
-};
-
-// Named numbers an expression may read besides its variables (a config's `constants:`).
-using ExpressionConstants = std::vector<std::pair<std::string, double>>;
 
 class Expression {
  public:
