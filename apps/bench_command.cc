@@ -15,6 +15,7 @@
 
 #include "apps/accuracy_bench.h"
 #include "apps/autoint_bench.h"
+#include "apps/expression_bench.h"
 #include "apps/gemm_rate.h"
 #include "apps/nerf_bench.h"
 #include "apps/problem_bench.h"
@@ -192,11 +193,13 @@ struct BenchModes {
   std::shared_ptr<NerfBenchOptions> nerf = std::make_shared<NerfBenchOptions>();
   std::shared_ptr<AutointBenchOptions> autoint = std::make_shared<AutointBenchOptions>();
   std::shared_ptr<ProblemBenchOptions> problems = std::make_shared<ProblemBenchOptions>();
+  std::shared_ptr<ExpressionBenchOptions> expressions = std::make_shared<ExpressionBenchOptions>();
   std::shared_ptr<std::filesystem::path> autoint_out = std::make_shared<std::filesystem::path>(autoint->out);
-  // --accuracy, --no-fail, --nerf, --autoint, --no-grid, --problems.
+  // --accuracy, --no-fail, --nerf, --autoint, --no-grid, --problems, --expressions.
   std::shared_ptr<bool> accuracy_flag = std::make_shared<bool>(false), no_fail = std::make_shared<bool>(false),
                         nerf_flag = std::make_shared<bool>(false), autoint_flag = std::make_shared<bool>(false),
-                        no_grid = std::make_shared<bool>(false), problems_flag = std::make_shared<bool>(false);
+                        no_grid = std::make_shared<bool>(false), problems_flag = std::make_shared<bool>(false),
+                        expressions_flag = std::make_shared<bool>(false);
 };
 
 // The step timing of the SIREN reference network (the default mode).
@@ -234,7 +237,7 @@ void add_accuracy_options(CLI::App* bench, const BenchModes& m) {
                   "--accuracy: exit 0 even when a case misses its target (default: exit code 4, after a "
                   "line naming the cases that missed)");
   bench->add_option("--set", m.accuracy->overrides,
-                    "--accuracy, --nerf, --autoint: override a value in every case's config, in the --nerf "
+                    "--accuracy, --nerf, --autoint, --expressions: override a value in every case's config, in the --nerf "
                     "config, or in every --autoint run's config");
 }
 
@@ -310,7 +313,33 @@ void add_problem_options(CLI::App* bench, const BenchModes& m) {
       ->capture_default_str();
 }
 
+void add_expression_options(CLI::App* bench, const BenchModes& m) {
+  bench->add_flag("--expressions", *m.expressions_flag,
+                  "Time Adam steps of configs with every config expression through muparser per point against "
+                  "the compiled block form, in the same run, and print each one's share of the step "
+                  "(--steps per round, default 50; --threads, default 1; --set)")
+      ->excludes("--accuracy")
+      ->excludes("--nerf")
+      ->excludes("--autoint")
+      ->excludes("--problems");
+  bench->add_option("--expression-cases", m.expressions->cases, "--expressions: the cases (CASE.yaml)")
+      ->capture_default_str();
+  bench->add_option("--expression-configs", m.expressions->configs, "--expressions: folder of the cases' configs")
+      ->check(CLI::ExistingDirectory)
+      ->capture_default_str();
+  bench->add_option("--rounds", m.expressions->rounds, "--expressions: rounds of both evaluators (median)")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+}
+
 void run_selected(const CLI::App* bench, const BenchModes& m) {
+  if (*m.expressions_flag) {
+    if (bench->count("--steps") > 0) m.expressions->steps = m.step->steps;
+    if (bench->count("--threads") > 0) m.expressions->threads = m.step->threads;
+    m.expressions->json_only = m.step->json_only;
+    m.expressions->overrides = m.accuracy->overrides;
+    return run_expression_bench(*m.expressions);
+  }
   if (*m.problems_flag) {
     if (bench->count("--batch") > 0) m.problems->batches = m.step->batches;
     m.problems->steps = m.step->steps;
@@ -354,6 +383,7 @@ void add_bench_command(CLI::App& app) {
   add_nerf_options(bench, modes);
   add_autoint_options(bench, modes);
   add_problem_options(bench, modes);
+  add_expression_options(bench, modes);
   bench->callback([bench, modes] { run_selected(bench, modes); });
 }
 

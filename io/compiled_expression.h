@@ -49,7 +49,7 @@
 
 #include <Eigen/Core>
 
-#include "io/expression.h"
+#include "io/expression_error.h"
 
 namespace nfield::io {
 

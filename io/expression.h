@@ -1,21 +1,36 @@
 // SPDX-License-Identifier: MIT
 #pragma once
 // Math expressions from config files, such as `2*pi^2*sin(pi*x)*sin(pi*y)`, evaluated
-// over batches of points (muparser underneath).
+// over batches of points: condition values, sources, exact solutions.
 //
 // Available: + - * / ^ (power), comparisons, `c ? a : b`; constants pi and e;
 // functions sin cos tan asin acos atan sinh cosh tanh asinh acosh atanh exp log (natural)
 // log2 log10 sqrt abs sign atan2(y, x) pow(a, b) min max sum avg, and
 // heaviside(x) = step(x) = (x >= 0 ? 1 : 0), besselj0(x) and besselj1(x) (J0 and J1, the
-// Bessel functions of the first kind, through std::cyl_bessel_j; not in
-// io::CompiledExpression, whose functions carry derivatives).
+// Bessel functions of the first kind, through std::cyl_bessel_j).
 //
 //   Expression source("2*pi^2*sin(pi*x)*sin(pi*y)");      // variables x, y, z, t
 //   Eigen::VectorXd f = source.evaluate(points);           // points: n x 2 -> z = t = 0
 //
+// Two evaluators, one class. muparser parses every text (its messages and positions are the
+// ones a config error reports, and it tells which variables a text uses). Where the text is
+// also in the language of io::CompiledExpression (+ − * / ^, unary ±, sin cos tan exp log
+// sqrt abs tanh sinh cosh atan min max pow atan2, pi, e, the constants), evaluate runs that
+// tape instead, over blocks of 256 points: one pass per instruction over the block rather
+// than one bytecode interpretation per point (issue 29 item 4; figures in docs/experiments.md,
+// 2026-11-26, `nfield bench --expressions`). The rest (comparisons, `c ? a : b`, sign, asin,
+// log10, sum, besselj0, min of three, …) stays with muparser; compiled() tells which.
+//
+// The two agree to rounding, not always to the last bit. The tape folds constant subtrees
+// and computes a constant integer power k (|k| ≤ 64) by repeated squaring, where muparser
+// calls pow for a power of anything but a bare variable and folds its own patterns
+// ((3*x + 1)*2 as 6*x + 2). So (x + 1)^3 or x^4 may differ in the last bit or two; sums,
+// products, quotients, x^2, x^3 and the functions (the same libm calls) do not.
+//
 // Thread safety: evaluate may be called on the same Expression (or copies of it) from
-// many threads at once. Each call borrows a private muparser instance from a pool owned
-// by the expression, so no locking happens while evaluating. evaluate itself is serial;
+// many threads at once. The compiled form is read-only and each call has its own scratch;
+// a muparser evaluation borrows a private muparser instance from a pool owned by the
+// expression, so no locking happens while evaluating. evaluate itself is serial;
 // parallelise over batches in the caller.
 
 #include <cstddef>
@@ -29,30 +44,9 @@
 
 #include <Eigen/Core>
 
+#include "io/expression_error.h"
+
 namespace nfield::io {
-
-// A malformed expression or an unknown name. what() is
-//   in expression 'sin(pi*q)': Unexpected token "q" found at position 7.
-// position() is the 0-based offset of the offending character (as in muparser's
-// message), so a config reader can turn it into a file column.
-class ExpressionError : public std::runtime_error {
- public:
-  ExpressionError(std::string expression, std::size_t position, std::string reason);
-
-  const std::string& expression() const { return expression_; }
-  // 0-based; std::string::npos when muparser gives none.
-  std::size_t position() const { return position_; }
-  // muparser's message alone.
-  const std::string& reason() const { return reason_; }
-
- private:
-  std::string expression_;
-  std::size_t position_;
-  std::string reason_;
-};
-
-// Named numbers an expression may read besides its variables (a config's `constants:`).
-using ExpressionConstants = std::vector<std::pair<std::string, double>>;
 
 class Expression {
  public:
@@ -71,6 +65,20 @@ class Expression {
   Eigen::VectorXd evaluate(const Eigen::Ref<const Eigen::MatrixXd>& points) const;
   // One point (variables in order, missing ones 0).
   double evaluate(std::span<const double> point) const;
+  // evaluate through muparser, point by point, even where the compiled form exists (tests
+  // and benchmarks compare the two).
+  Eigen::VectorXd evaluate_interpreted(const Eigen::Ref<const Eigen::MatrixXd>& points) const;
+  // Whether evaluate runs the compiled tape (false: the text needs muparser).
+  bool compiled() const;
+
+  // Benchmarks only, process-wide: every evaluate through muparser (on) or, where
+  // possible, the compiled form (off, the default), so that one run can time both.
+  static void set_interpreter_only(bool on);
+  // Benchmarks only, process-wide: from now on add the wall time of every evaluate to a
+  // counter (reset here; off stops counting), read by counted_seconds. Off by default; on,
+  // each call reads the clock twice.
+  static void count_evaluation_time(bool on);
+  static double counted_seconds();
 
   // Whether the expression mentions `variable` (e.g. `t` to tell time dependence).
   bool uses(std::string_view variable) const;
@@ -82,6 +90,7 @@ class Expression {
   const std::vector<std::string>& variables() const;
 
  private:
+  void check_columns(Eigen::Index columns) const;
   struct Shared;
   std::shared_ptr<Shared> shared_;
 };
