@@ -58,7 +58,14 @@ std::shared_ptr<const Ansatz> read_ansatz(const std::vector<ConditionItem>& item
     } else {
       if (!dirichlet) {
         dirichlet = Ansatz::Dirichlet{{}, values};
+        dirichlet->fade = item.fade;
+        dirichlet->saturate = item.saturate;
         dirichlet_item = item.node;
+      } else if (item.fade != dirichlet->fade || item.saturate != dirichlet->saturate) {
+        throw item.node.error(item.fade != dirichlet->fade ? "fade" : "saturate",
+                              "hard Dirichlet conditions must all carry the same `fade` and `saturate` (the "
+                                      "hard one at line " +
+                                            std::to_string(dirichlet_item->mark().line + 1) + " differs)");
       } else if (texts(values) != texts(dirichlet->values)) {
         throw item.node.error("value", "hard Dirichlet conditions must all carry the same value (this "
                                        "one differs from the hard one at line " +
