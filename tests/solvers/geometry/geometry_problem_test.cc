@@ -206,12 +206,13 @@ TEST(GeometryProblem, HardDirichletOnPartsHoldsForAnyNetwork) {
 
 // `fade: δ`: A = g·exp(−φ/δ), g on the hard parts for any network, less than g inside; its
 // gradient and Laplacian (finite differences of the product) against the product rule on φ's
-// exact derivatives.
+// exact derivatives; `saturate: s`: D = s·tanh(φ/s) against the chain rule.
 TEST(GeometryProblem, HardDirichletFadeIsGOnThePartsAndFadesInside) {
   std::string text = kPlate;
   const std::string from = "{on: plate, type: dirichlet, value: \"exp(0.5*x - 0.25*y)\", weight: 10}";
   text.replace(text.find(from), from.size(),
-               "{on: [plate, left], type: dirichlet, value: \"exp(0.5*x - 0.25*y)\", enforce: hard, fade: 0.2}");
+               "{on: [plate, left], type: dirichlet, value: \"exp(0.5*x - 0.25*y)\", enforce: hard, fade: 0.2, "
+               "saturate: 0.3}");
   const RunSetup setup = load_run(write_config("fade", text), {});
   const auto ansatz = setup.problem->ansatz();
   ASSERT_TRUE(ansatz);
@@ -223,6 +224,7 @@ TEST(GeometryProblem, HardDirichletFadeIsGOnThePartsAndFadesInside) {
   EXPECT_LT((ansatz->values(on, Eigen::MatrixXd::Constant(200, 1, -2.1)) - exact.evaluate(on)).cwiseAbs().maxCoeff(), 1e-9);
   const Eigen::MatrixXd x = d.sample_interior(rng, 50);
   const Jet a = ansatz->base_jets(x, true)[0];
+  const Jet factor = ansatz->factor_jet(x, true);
   const geometry::Selection parts = g.select({"plate", "left"});
   for (Eigen::Index r = 0; r < x.rows(); ++r) {
     const geometry::Scalar2 phi = g.distance(geometry::Vec3(x(r, 0), x(r, 1), 0), parts);
@@ -233,6 +235,12 @@ TEST(GeometryProblem, HardDirichletFadeIsGOnThePartsAndFadesInside) {
     EXPECT_LT(a.value(r), gv);
     EXPECT_LT((a.gradient.row(r).transpose() - (w * grad_g + gv * grad_w)).norm(), 1e-7);
     EXPECT_NEAR(a.hessian[0](r) + a.hessian[3](r), w * lap_g + gv * lap_w + 2 * grad_g.dot(grad_w), 1e-4);
+    // saturate: D = s·tanh(φ/s), D' = sech², D'' = −2 tanh sech² / s.
+    const double th = std::tanh(phi.v / 0.3), sech2 = 1 - th * th;
+    EXPECT_NEAR(factor.value(r), 0.3 * th, 1e-14);
+    EXPECT_LT((factor.gradient.row(r).transpose() - sech2 * phi.g.head(2)).norm(), 1e-12);
+    EXPECT_NEAR(factor.hessian[0](r) + factor.hessian[3](r),
+                sech2 * phi.h.trace() - 2 * th * sech2 / 0.3 * phi.g.head(2).squaredNorm(), 1e-10);
   }
 }
 

@@ -92,6 +92,33 @@ TEST(SplineDistance, SphereMeshDistanceAndDerivatives) {
   }
 }
 
+// The bunny at configs/poisson_bunny.yaml's 24 cells: the zero level near every vertex, φ
+// positive at interior points (also in the ears, a few cells thick).
+TEST(SplineDistance, BunnyZeroLevelNearTheVertices) {
+  std::unique_ptr<MeshShape> mesh = read_mesh_shape(kMeshes / "bunny00.ply");
+  mesh->use_spline_distance(24);
+  const double h = mesh->spline_distance()->spacing();
+  const Eigen::MatrixXd& v = mesh->mesh().vertices;
+  double worst = 0, sum_sq = 0;
+  for (Eigen::Index i = 0; i < v.rows(); ++i) {
+    const double d = mesh->distance(variables(v.row(i).transpose())).v;
+    worst = std::max(worst, std::abs(d));
+    sum_sq += d * d;
+  }
+  std::printf("bunny, 24 cells (h = %.4f): |phi| at the %d vertices: largest %.2e, rms %.2e\n", h,
+              static_cast<int>(v.rows()), worst, std::sqrt(sum_sq / static_cast<double>(v.rows())));
+  EXPECT_LT(worst, h);
+  Geometry g(ShapeTree::primitive("surface", std::move(mesh)));
+  Random rng(11);
+  const Eigen::MatrixXd x = g.sample_interior(rng, 2000);
+  int negative = 0;
+  for (Eigen::Index k = 0; k < x.rows(); ++k) negative += g.distance(Vec3(x.row(k).transpose())).v <= 0;
+  std::printf("bunny: phi <= 0 at %d of 2000 interior points\n", negative);
+  // Measured 26 (1.3 %): the points between the mesh and the zero level, which lies up to
+  // 0.36 h off it (rms 0.11 h) where the spline rounds the scan's creases and the ears' tips.
+  EXPECT_LT(negative, 60);
+}
+
 TEST(SplineDistance, PlacedMeshThroughConfig) {
   // A scaled, rotated, translated mesh: ψ_world(x) = s ψ(local(x)); derivatives by differences.
   const io::ConfigNode root = io::parse_config(
