@@ -163,6 +163,16 @@ ConditionItem read_item(const io::ConfigNode& item, std::size_t index, const Dom
   }
   if (c.hard && c.type == ConditionType::kInitialValue && item.has("time_scale"))
     c.time_scale = item.get_positive<double>("time_scale");
+  if (item.has("fade")) {
+    item.require("fade", c.hard && c.type == ConditionType::kDirichlet && c.parts,
+                 "`fade` belongs to a hard Dirichlet condition on parts of a domain.geometry");
+    c.fade = item.get_positive<double>("fade");
+  }
+  if (item.has("saturate")) {
+    item.require("saturate", c.hard && c.type == ConditionType::kDirichlet && c.parts,
+                 "`saturate` belongs to a hard Dirichlet condition on parts of a domain.geometry");
+    c.saturate = item.get_positive<double>("saturate");
+  }
   item.reject_unknown_keys();
   return c;
 }

@@ -70,6 +70,8 @@ struct ConditionItem {
   double weight = 1;
   bool hard = false;
   double time_scale = 0;  // hard initial value: s > 0 for ψ = tanh(τ/s)
+  double fade = 0;        // hard Dirichlet on parts, `fade: δ` > 0: A = g·exp(−φ/δ)
+  double saturate = 0;    // hard Dirichlet on parts, `saturate: s` > 0: D = s·tanh(φ/s)
   std::size_t index = 0;  // its position in the list (term names)
   io::ConfigNode node;    // the item, for errors found later
 

@@ -61,7 +61,14 @@ struct HardItems {
   void add_dirichlet(const ConditionItem& item, std::vector<io::Expression> values) {
     if (!dirichlet) {
       dirichlet = Ansatz::Dirichlet{{}, std::move(values)};
+      dirichlet->fade = item.fade;
+      dirichlet->saturate = item.saturate;
       dirichlet_item = item.node;
+    } else if (item.fade != dirichlet->fade || item.saturate != dirichlet->saturate) {
+      throw item.node.error(item.fade != dirichlet->fade ? "fade" : "saturate",
+                            "hard Dirichlet conditions must all carry the same `fade` and `saturate` (the "
+                            "hard one at line " +
+                                std::to_string(dirichlet_item->mark().line + 1) + " differs)");
     } else if (texts(values) != texts(dirichlet->values)) {
       throw item.node.error("value", "hard Dirichlet conditions must all carry the same value (this "
                                      "one differs from the hard one at line " +

@@ -60,8 +60,19 @@ Ansatz::Ansatz(const Domain& domain, int channels, std::optional<Dirichlet> diri
     throw std::invalid_argument("Ansatz: hard initial conditions need a time interval");
 }
 
+Eigen::VectorXd Ansatz::fade_weights(const Eigen::MatrixXd& x) const {
+  const geometry::Geometry& g = *domain_.geometry();
+  Eigen::VectorXd w(x.rows());
+  for (Eigen::Index r = 0; r < x.rows(); ++r) {
+    geometry::Vec3 y = geometry::Vec3::Zero();
+    for (int a = 0; a < g.dim(); ++a) y(a) = x(r, a);
+    w(r) = std::exp(-g.distance(y, *dirichlet_->parts).v / dirichlet_->fade);
+  }
+  return w;
+}
+
 Jet Ansatz::expression_jet(const io::Expression& e, const Eigen::MatrixXd& x,
-                           const std::vector<bool>& hessian, bool frozen_time) const {
+                           const std::vector<bool>& hessian, bool frozen_time, bool fade) const {
   const Eigen::Index n = x.rows();
   const int d = domain_.input_dim();
   const bool second = !hessian.empty();
@@ -72,14 +83,18 @@ Jet Ansatz::expression_jet(const io::Expression& e, const Eigen::MatrixXd& x,
   if (frozen_time) base.col(domain_.time_column()).setConstant(domain_.time().first);
   Jet jet = Jet::constant(n, d, 0.0);
   if (!second) jet.hessian.clear();
-  jet.value = e.evaluate(base);
-  if (e.is_constant()) return jet;
+  const auto evaluate = [&](const Eigen::MatrixXd& points) {
+    return fade ? Eigen::VectorXd(e.evaluate(points).cwiseProduct(fade_weights(points))) : e.evaluate(points);
+  };
+  jet.value = evaluate(base);
+  if (e.is_constant() && !fade) return jet;
 
   const std::vector<std::string> names = domain_.input_names();
   const Eigen::VectorXd extent = domain_.input_upper() - domain_.input_lower();
   std::vector<int> axes;
   for (int a = 0; a < d; ++a)
-    if (e.uses(names[a]) && !(frozen_time && a == domain_.time_column())) axes.push_back(a);
+    if ((e.uses(names[a]) || (fade && a < domain_.space_dim())) && !(frozen_time && a == domain_.time_column()))
+      axes.push_back(a);
   const Eigen::VectorXd h = 1e-3 * extent;
   // Offsets −2, −1, 1, 2 and the 4th-order first-derivative weights (× 1/12h).
   static constexpr int kOffsets[4] = {-2, -1, 1, 2};
@@ -91,7 +106,7 @@ Jet Ansatz::expression_jet(const io::Expression& e, const Eigen::MatrixXd& x,
     for (int k = 0; k < 4; ++k) {
       shifted = base;
       shifted.col(a).array() += kOffsets[k] * h(a);
-      const Eigen::VectorXd f = e.evaluate(shifted);
+      const Eigen::VectorXd f = evaluate(shifted);
       first += kFirst[k] * f;
       diag += kSecond[k] * f;
     }
@@ -109,7 +124,7 @@ Jet Ansatz::expression_jet(const io::Expression& e, const Eigen::MatrixXd& x,
             shifted = base;
             shifted.col(a).array() += kOffsets[i] * h(a);
             shifted.col(b).array() += kOffsets[j] * h(b);
-            mixed += (kFirst[i] * kFirst[j]) * e.evaluate(shifted);
+            mixed += (kFirst[i] * kFirst[j]) * evaluate(shifted);
           }
         mixed /= h(a) * h(b);
         jet.hessian[static_cast<size_t>(a * d + b)] = mixed;
@@ -149,7 +164,7 @@ std::vector<Jet> Ansatz::base_jets(const Eigen::MatrixXd& x, const std::vector<b
       }
       out.push_back(std::move(jet));
     } else if (dirichlet_) {
-      out.push_back(expression_jet(dirichlet_->values[c], x, hessian, false));
+      out.push_back(expression_jet(dirichlet_->values[c], x, hessian, false, dirichlet_->fade > 0));
     } else {
       Jet zero = Jet::constant(x.rows(), d, 0.0);
       if (!second) zero.hessian.clear();
@@ -161,15 +176,19 @@ std::vector<Jet> Ansatz::base_jets(const Eigen::MatrixXd& x, const std::vector<b
 
 namespace {
 // φ of the geometry's parts at the rows of x (space columns first; 0 derivatives in t).
-Jet distance_jet(const geometry::Geometry& g, const geometry::Selection& parts, const Eigen::MatrixXd& x, int d,
-                 bool second) {
+Jet distance_jet(const geometry::Geometry& g, const geometry::Selection& parts, double saturate,
+                 const Eigen::MatrixXd& x, int d, bool second) {
   Jet jet = Jet::constant(x.rows(), d, 0.0);
   if (!second) jet.hessian.clear();
   const int space = g.dim();
   for (Eigen::Index r = 0; r < x.rows(); ++r) {
     geometry::Vec3 p = geometry::Vec3::Zero();
     for (int a = 0; a < space; ++a) p(a) = x(r, a);
-    const geometry::Scalar2 phi = g.distance(p, parts);
+    geometry::Scalar2 phi = g.distance(p, parts);
+    if (saturate > 0) {  // s·tanh(φ/s): derivatives sech² and −2 tanh sech² / s
+      const double th = std::tanh(phi.v / saturate), sech2 = 1 - th * th;
+      phi = phi.chain(saturate * th, sech2, -2 * th * sech2 / saturate);
+    }
     jet.value(r) = phi.v;
     for (int a = 0; a < space; ++a) {
       jet.gradient(r, a) = phi.g(a);
@@ -185,7 +204,7 @@ Jet Ansatz::factor_jet(const Eigen::MatrixXd& x, bool second) const {
   const int d = domain_.input_dim();
   Jet jet = Jet::constant(x.rows(), d, 1.0);
   if (!second) jet.hessian.clear();
-  if (dirichlet_ && dirichlet_->parts) jet = jet * distance_jet(*domain_.geometry(), *dirichlet_->parts, x, d, second);
+  if (dirichlet_ && dirichlet_->parts) jet = jet * distance_jet(*domain_.geometry(), *dirichlet_->parts, dirichlet_->saturate, x, d, second);
   if (dirichlet_)
     for (const Face& f : dirichlet_->faces) {
       const double lo = domain_.lower()[f.axis], hi = domain_.upper()[f.axis];

@@ -17,6 +17,11 @@
 //   Dirichlet on parts P of a geometry (domain.geometry):  A = g,  D = φ_P(x), the
 //       R-function distance to those parts (solvers/geometry/geometry.h: Geometry::distance),
 //       0 on them, positive inside, ∂φ/∂n = −1 there, with its exact gradient and Hessian.
+//       With `saturate: s`, D = s·tanh(φ/s): the same near the parts, ≈ s deep inside. A
+//       distance has ridges on the medial axis (the points with two closest boundary points;
+//       a mesh's spline distance rounds them over one cell, so its Hessian is of order 1/h
+//       there), and u = A + D·N hands them to N = (u − A)/D unless D flattens out before
+//       them: tanh' = sech² is e^{−2φ/s}-small where φ ≫ s.
 //   Wave initial data (u(x,t0) = u0, u_t(x,t0) = v0), τ = t − t0, T = t1 − t0:
 //       A = u0(x) + τ v0(x),   D = ψ(τ)² with ψ = τ/T   (value only hard: A = u0, D = ψ)
 //   both:  A = u0 + τ v0,   D = φ(x) ψ(τ)².
@@ -28,6 +33,17 @@
 // The combined form is exact only for compatible data: g independent of t, u0 = g and v0 = 0
 // on the hard faces (checked at load; otherwise a config error). Then A = g on the faces,
 // A(·,t0) = u0, A_t(·,t0) = v0, and D, D_t vanish at t0 and D on the faces.
+//
+// Fading g. A = g(x) makes the ansatz exact for N = 0 whenever g is the solution itself (a
+// manufactured u* given as the boundary value): the network would have nothing to learn. With
+// `fade: δ` (parts of a geometry only) A(x) = g(x)·exp(−φ(x)/δ): g on the parts (φ = 0),
+// fading inward over a length δ, so that away from the boundary u ≈ φ·N and the network
+// carries the solution, as in a problem with zero boundary values. Its derivatives come from
+// the same finite differences below (of the product, all space axes), which need φ ∈ C² (a
+// mesh: `distance: smooth`, solvers/geometry/spline_distance.h). Tried first and dropped:
+// g(x − φ∇φ), the boundary values carried inward along ∇φ; its Laplacian holds φ·∇³φ, which
+// is of order φ/h² where a spline rounds the distance's ridge on the medial axis (hundreds in
+// the bunny: a first loss of 10⁵ against 10³ for the fade).
 //
 // Several hard Dirichlet items are supported when they carry the same `value` expression(s)
 // (compared as text, per channel): g is that expression evaluated inside the box. Different
@@ -163,6 +179,10 @@ class Ansatz {
     std::vector<io::Expression> values;  // one per channel
     // On a domain with a geometry: the parts instead of faces, D = φ of Geometry::distance.
     std::optional<geometry::Selection> parts{};
+    // With parts and fade = δ > 0: A(x) = g(x)·exp(−φ(x)/δ) instead of g(x) (see above).
+    double fade = 0;
+    // With parts and saturate = s > 0: D = s·tanh(φ/s) instead of φ (see above).
+    double saturate = 0;
   };
   struct Initial {
     std::vector<io::Expression> value;                    // u0, one per channel
@@ -200,7 +220,9 @@ class Ansatz {
 
  private:
   Jet expression_jet(const io::Expression& e, const Eigen::MatrixXd& x,
-                     const std::vector<bool>& hessian, bool frozen_time) const;
+                     const std::vector<bool>& hessian, bool frozen_time, bool fade = false) const;
+  // exp(−φ/δ) at the rows of x (`fade`).
+  Eigen::VectorXd fade_weights(const Eigen::MatrixXd& x) const;
 
   const Domain domain_;
   int channels_;

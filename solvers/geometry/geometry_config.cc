@@ -115,11 +115,19 @@ std::unique_ptr<Primitive> read_primitive(const io::ConfigNode& n, const std::st
   // mesh
   set_dim(n, c, 3, "mesh");
   const std::filesystem::path path = c.dir / n.get<std::string>("file");
+  // ψ: `exact` (the Euclidean distance, C¹) or `smooth` (its quintic spline, spline_distance.h).
+  const bool smooth = n.get_choice("distance", {"exact", "smooth"}, std::string("exact")) == "smooth";
+  n.require("distance_cells", smooth || !n.has("distance_cells"), "`distance_cells` needs `distance: smooth`");
+  const int cells = n.get_or("distance_cells", 64);
+  n.require("distance_cells", cells >= 4 && cells <= 512, "expected a whole number of cells from 4 to 512");
+  std::unique_ptr<MeshShape> mesh;
   try {
-    return read_mesh_shape(path);
+    mesh = read_mesh_shape(path);
   } catch (const std::exception& e) {
     throw n.error("file", e.what());
   }
+  if (smooth) mesh->use_spline_distance(cells);
+  return mesh;
 }
 
 Similarity read_placement(const io::ConfigNode& n, const Context& c) {

@@ -16,6 +16,7 @@
 #include <vtkSmartPointer.h>
 #include <vtkStaticCellLocator.h>
 
+#include "io/mesh_distance.h"
 #include "io/vtk_convert.h"
 
 namespace nfield::solvers::geometry {
@@ -220,7 +221,34 @@ bool MeshShape::contains(const Vec3& x) const {
   return inside;
 }
 
+namespace {
+// ψ(x(ξ)) from ψ's value, gradient g and Hessian H in x and the derivatives x carries in ξ.
+Scalar2 compose(double value, const Vec3& g, const Eigen::Matrix3d& hess, const Coords& x) {
+  Scalar2 r(value);
+  for (int i = 0; i < 3; ++i) {
+    r.g += g(i) * x[static_cast<size_t>(i)].g;
+    r.h += g(i) * x[static_cast<size_t>(i)].h;
+    for (int j = 0; j < 3; ++j)
+      r.h += hess(i, j) * x[static_cast<size_t>(i)].g * x[static_cast<size_t>(j)].g.transpose();
+  }
+  return r;
+}
+}  // namespace
+
+void MeshShape::use_spline_distance(int cells) {
+  spline_ = std::make_unique<SplineDistance>(bounds_, cells, [this](const Eigen::MatrixXd& points) {
+    Eigen::VectorXd d = io::mesh_distance(points, mesh_);
+    for (Eigen::Index r = 0; r < d.size(); ++r)
+      if (!contains(points.row(r).transpose())) d(r) = -d(r);
+    return d;
+  });
+}
+
 Scalar2 MeshShape::distance(const Coords& x) const {
+  if (spline_) {
+    const Scalar2 s = (*spline_)(Vec3(x[0].v, x[1].v, x[2].v));
+    return compose(s.v, s.g, s.h, x);
+  }
   double point[3] = {x[0].v, x[1].v, x[2].v}, closest[3];
   vtkIdType cell = 0;
   int sub = 0;
@@ -253,14 +281,7 @@ Scalar2 MeshShape::distance(const Coords& x) const {
     hess = (Eigen::Matrix3d::Identity() - g * g.transpose()) / d;
   }
   // Compose with the derivatives the coordinates carry (a rotated or scaled mesh).
-  Scalar2 r(sign * d);
-  for (int i = 0; i < 3; ++i) {
-    r.g += sign * g(i) * x[static_cast<size_t>(i)].g;
-    r.h += sign * g(i) * x[static_cast<size_t>(i)].h;
-    for (int j = 0; j < 3; ++j)
-      r.h += sign * hess(i, j) * x[static_cast<size_t>(i)].g * x[static_cast<size_t>(j)].g.transpose();
-  }
-  return r;
+  return compose(sign * d, sign * g, sign * hess, x);
 }
 
 SurfacePoint MeshShape::boundary_point(const double* u) const {

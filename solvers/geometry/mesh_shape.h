@@ -35,6 +35,9 @@
 // its Hessian 0 when c lies inside a face, (I − eeᵀ − ĝĝᵀ)/d on an edge of direction e and
 // (I − ĝĝᵀ)/d at a vertex. It is exact, but only C¹: the Hessian jumps where the closest
 // feature changes (the medial axis and the planes between faces and edges).
+// With use_spline_distance(cells) (config `distance: smooth`) ψ is instead the quintic
+// spline of spline_distance.h fitted to that signed distance: C⁴, what a hard Dirichlet
+// condition's φ needs, with its zero set a smooth surface close to the mesh (not on it).
 #pragma once
 
 #include <filesystem>
@@ -42,6 +45,7 @@
 
 #include "io/triangle_mesh.h"
 #include "solvers/geometry/primitive.h"
+#include "solvers/geometry/spline_distance.h"
 
 namespace nfield::solvers::geometry {
 
@@ -59,6 +63,10 @@ class MeshShape final : public Primitive {
   SurfacePoint boundary_point(const double* u) const override;
   double proposal_measure() const override { return cumulative_.back(); }
   const io::TriangleMesh& mesh() const { return mesh_; }
+  // ψ from here on: the spline fitted to the exact signed distance on a grid of `cells` along
+  // the longest side of the bounding box (spline_distance.h); throws for cells < 4.
+  void use_spline_distance(int cells);
+  const SplineDistance* spline_distance() const { return spline_.get(); }
 
  private:
   struct Locator;
@@ -72,6 +80,7 @@ class MeshShape final : public Primitive {
   double y0_ = 0, z0_ = 0, cell_y_ = 1, cell_z_ = 1;
   std::vector<int> bucket_start_, bucket_items_;
   std::unique_ptr<Locator> locator_;
+  std::unique_ptr<SplineDistance> spline_;
 };
 
 // Reads a mesh file (io::read_triangle_mesh) and builds the shape; errors name the file.

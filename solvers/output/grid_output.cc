@@ -11,6 +11,7 @@
 #include "io/png_image.h"
 #include "io/pvd.h"
 #include "io/vtk_image.h"
+#include "solvers/output/domain_output.h"
 
 namespace nfield::solvers {
 namespace {
@@ -174,6 +175,24 @@ void write_solution_png(const std::filesystem::path& path, const io::Grid& grid,
   io::write_png(path, picture);
 }
 
+// The field at points of the boundary (a frame's points x): each output, and with a reference
+// exact_ and error_ (DomainOutput's surface arrays).
+io::PointArrays boundary_arrays(const Problem& problem, const StreamEvaluator& evaluate, const Eigen::MatrixXd& x) {
+  const std::vector<std::string> names = problem.output_names();
+  const Eigen::MatrixXd u = values_at(evaluate, problem.domain(), x);
+  io::PointArrays arrays;
+  const Eigen::MatrixXd exact = problem.has_exact() ? problem.exact(x) : Eigen::MatrixXd();
+  for (size_t c = 0; c < names.size(); ++c) {
+    const Eigen::Index i = static_cast<Eigen::Index>(c);
+    arrays[names[c]] = u.col(i);
+    if (problem.has_exact()) {
+      arrays["exact_" + names[c]] = exact.col(i);
+      arrays["error_" + names[c]] = u.col(i) - exact.col(i);
+    }
+  }
+  return arrays;
+}
+
 // The residual of `term` at x (rows per point); its squares inside the domain are added to
 // `sum_sq` and counted in `count`.
 Eigen::MatrixXd residual_at(const LossTerm& term, const StreamEvaluator& evaluate, const Eigen::MatrixXd& x,
@@ -210,6 +229,7 @@ GridMetrics write_grid_at(const Problem& problem, const StreamEvaluator& evaluat
   double residual_sq = 0;
   Eigen::Index residual_count = 0;
   io::PvdCollection pvd(output.dir / "solution.pvd");
+  DomainOutput on_domain(domain, grid, output.dir, domain.has_time());
   Eigen::MatrixXd xt_image(frames, grid.dims[0]);  // 1D + time preview
   for (int k = 0; k < frames; ++k) {
     double t;
@@ -252,9 +272,14 @@ GridMetrics write_grid_at(const Problem& problem, const StreamEvaluator& evaluat
     } else {
       io::write_vti(output.dir / "solution.vti", grid, arrays);
     }
+    on_domain.write(k, t, arrays, inside, [&](const Eigen::MatrixXd& s) {
+      double frame_t;
+      return boundary_arrays(problem, evaluate, frame_points(domain, s, k, frames, &frame_t, parameters));
+    });
     if (output.png && k == 0 && d >= 2) write_solution_png(output.dir / "solution.png", grid, u, d);
   }
   if (domain.has_time()) pvd.write();
+  on_domain.finish();
   if (output.png && domain.has_time() && d == 1)
     io::write_scalar_png(output.dir / "solution.png", xt_image, {std::nullopt, io::Colormap::kViridis});
   if (metrics.has_error) sums.report(metrics);

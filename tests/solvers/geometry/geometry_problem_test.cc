@@ -204,6 +204,46 @@ TEST(GeometryProblem, HardDirichletOnPartsHoldsForAnyNetwork) {
   EXPECT_GT(phi.value.minCoeff(), 0);
 }
 
+// `fade: δ`: A = g·exp(−φ/δ), g on the hard parts for any network, less than g inside; its
+// gradient and Laplacian (finite differences of the product) against the product rule on φ's
+// exact derivatives; `saturate: s`: D = s·tanh(φ/s) against the chain rule.
+TEST(GeometryProblem, HardDirichletFadeIsGOnThePartsAndFadesInside) {
+  std::string text = kPlate;
+  const std::string from = "{on: plate, type: dirichlet, value: \"exp(0.5*x - 0.25*y)\", weight: 10}";
+  text.replace(text.find(from), from.size(),
+               "{on: [plate, left], type: dirichlet, value: \"exp(0.5*x - 0.25*y)\", enforce: hard, fade: 0.2, "
+               "saturate: 0.3}");
+  const RunSetup setup = load_run(write_config("fade", text), {});
+  const auto ansatz = setup.problem->ansatz();
+  ASSERT_TRUE(ansatz);
+  const Domain& d = setup.problem->domain();
+  const geometry::Geometry& g = *d.geometry();
+  Random rng(5);
+  const Eigen::MatrixXd on = d.sample_boundary(g.select({"plate", "left"}), rng, 200).points;
+  const io::Expression exact("exp(0.5*x - 0.25*y)");
+  EXPECT_LT((ansatz->values(on, Eigen::MatrixXd::Constant(200, 1, -2.1)) - exact.evaluate(on)).cwiseAbs().maxCoeff(), 1e-9);
+  const Eigen::MatrixXd x = d.sample_interior(rng, 50);
+  const Jet a = ansatz->base_jets(x, true)[0];
+  const Jet factor = ansatz->factor_jet(x, true);
+  const geometry::Selection parts = g.select({"plate", "left"});
+  for (Eigen::Index r = 0; r < x.rows(); ++r) {
+    const geometry::Scalar2 phi = g.distance(geometry::Vec3(x(r, 0), x(r, 1), 0), parts);
+    const double gv = std::exp(0.5 * x(r, 0) - 0.25 * x(r, 1)), w = std::exp(-phi.v / 0.2);
+    const Eigen::Vector2d grad_g = gv * Eigen::Vector2d(0.5, -0.25), grad_w = -w * phi.g.head(2) / 0.2;
+    const double lap_g = gv * 0.3125, lap_w = w * (phi.g.head(2).squaredNorm() / 0.04 - phi.h.trace() / 0.2);
+    EXPECT_NEAR(a.value(r), gv * w, 1e-12);
+    EXPECT_LT(a.value(r), gv);
+    EXPECT_LT((a.gradient.row(r).transpose() - (w * grad_g + gv * grad_w)).norm(), 1e-7);
+    EXPECT_NEAR(a.hessian[0](r) + a.hessian[3](r), w * lap_g + gv * lap_w + 2 * grad_g.dot(grad_w), 1e-4);
+    // saturate: D = s·tanh(φ/s), D' = sech², D'' = −2 tanh sech² / s.
+    const double th = std::tanh(phi.v / 0.3), sech2 = 1 - th * th;
+    EXPECT_NEAR(factor.value(r), 0.3 * th, 1e-14);
+    EXPECT_LT((factor.gradient.row(r).transpose() - sech2 * phi.g.head(2)).norm(), 1e-12);
+    EXPECT_NEAR(factor.hessian[0](r) + factor.hessian[3](r),
+                sech2 * phi.h.trace() - 2 * th * sech2 / 0.3 * phi.g.head(2).squaredNorm(), 1e-10);
+  }
+}
+
 TEST(GeometryProblem, RefusedInputsAreLocated) {
   using testutil::expect_located_error;
   auto with = [](const std::string& from, const std::string& to) {
@@ -230,6 +270,9 @@ domain:
 equation: {speed: 1}
 )yaml"),
                        {3, 13, "domain.geometry", "problem: wave takes a box domain"});
+  expect_located_error(write_config("soft_fade", with("value: \"exp(0.5*x - 0.25*y)\", weight: 10}",
+                                                      "value: \"exp(0.5*x - 0.25*y)\", weight: 10, fade: 0.1}")),
+                       {13, 82, "conditions[0].fade", "hard Dirichlet"});
   expect_located_error(write_config("box_keys", with("domain:\n", "domain:\n  lower: [0, 0]\n")),
                        {3, 10, "domain.lower", "takes no `lower`"});
 }
