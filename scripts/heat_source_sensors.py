@@ -5,18 +5,20 @@
 
 The manufactured solution (its derivation is in the config's header):
   u*(x, y, t) = exp(-2 pi^2 kappa t) sin(pi x) sin(pi y) + psi(x, y),
-  psi = -(x^2 + y^2)/(4 kappa) - x^3/(6 kappa) + 0.8 sin(2 pi x) sin(pi y)/(5 pi^2 kappa),
-so that u*_t - kappa lap(u*) = s(x, y) = 1 + x + 0.8 sin(2 pi x) sin(pi y), kappa = 0.1.
+  psi = c [-(x^2 + y^2)/(4 kappa) - x^3/(6 kappa) + 0.8 sin(2 pi x) sin(pi y)/(5 pi^2 kappa)],
+so that u*_t - kappa lap(u*) = s(x, y) = c (1 + x + 0.8 sin(2 pi x) sin(pi y)), kappa = 0.1,
+c = 0.2 (psi then spans [-1.33, 0], the size of the transient).
 The sensors are uniform in [0.05, 0.95]^2 from numpy's default_rng(26); no noise.
 Run: python3 scripts/heat_source_sensors.py  (from the repository root)
 """
 import numpy as np
 
 KAPPA = 0.1
+C = 0.2
 
 
 def u_exact(x, y, t):
-    psi = (-(x**2 + y**2) / (4 * KAPPA) - x**3 / (6 * KAPPA)
+    psi = C * (-(x**2 + y**2) / (4 * KAPPA) - x**3 / (6 * KAPPA)
            + 0.8 * np.sin(2 * np.pi * x) * np.sin(np.pi * y) / (5 * np.pi**2 * KAPPA))
     return np.exp(-2 * np.pi**2 * KAPPA * t) * np.sin(np.pi * x) * np.sin(np.pi * y) + psi
 

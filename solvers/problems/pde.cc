@@ -47,7 +47,8 @@
 // evaluation. `data:` adds the measurements' loss term. An unknown constant no residual reads
 // is a warning (the data alone cannot tell it); `true:` on a known constant is an error.
 // Unknown fields (`unknown_fields: {a: {true: EXPR}}`, solvers/problems/pde_unknown_fields.h)
-// are extra outputs of the field after `outputs`, read by residuals as the outputs are.
+// are extra outputs of the field after `outputs` (or, with `hidden`, small networks of their
+// own: fields/field_branches.h), read by residuals as the outputs are.
 // Parametric fields (issue 28): `nu: {range: [a, b], sampling: uniform | log}` is an input
 // column of the domain (solvers/core/domain.h, parameters), read by name as x or t are; not with
 // `unknown`; `reference.held_out` lists the values outputs are evaluated at.
