@@ -8,9 +8,11 @@
 //                               encoding_features, encoding_scale, encoding_seed,
 //                               encoding_lower, encoding_upper (when set), and each
 //                               encoding type's own (EncodingType::save: encoding_axis, …,
-//                               encoding_levels, …)
+//                               encoding_levels, …); with branches (fields/field_branches.h)
+//                               also branches and branch_K_{type, hidden, activation,
+//                               first_omega, hidden_omega, inputs, positive}
 //   /field/layers/K/weight      out × in (as PyTorch's nn.Linear.weight), layer K = 0, 1, …
-//                               (dense layers only)
+//                               (dense layers only: the field's own, then each branch's)
 //   /field/layers/K/bias        out
 //   /field/encoding             the fixed encoding matrix B (m × d), when there is one
 //   /field/encoding_parameters  the trained parameters of an encoding, when it has any, in
