@@ -55,6 +55,16 @@ void Sequential<Scalar>::add(std::unique_ptr<Module<Scalar>> module) {
 }
 
 template <typename Scalar>
+std::vector<std::unique_ptr<Module<Scalar>>> Sequential<Scalar>::release_modules() {
+  std::vector<std::unique_ptr<Module<Scalar>>> modules = std::move(modules_);
+  modules_.clear();
+  offsets_.clear();
+  parameter_count_ = 0;
+  workspaces_.clear();
+  return modules;
+}
+
+template <typename Scalar>
 Eigen::Index Sequential<Scalar>::input_width() const {
   return modules_.empty() ? 0 : modules_.front()->input_width();
 }

@@ -69,6 +69,8 @@ class Sequential {
   void add(std::unique_ptr<Module<Scalar>> module);
 
   const std::vector<std::unique_ptr<Module<Scalar>>>& modules() const { return modules_; }
+  // Hands the modules over and leaves the chain empty (to rebuild them into another chain).
+  std::vector<std::unique_ptr<Module<Scalar>>> release_modules();
   Eigen::Index input_width() const;
   Eigen::Index output_width() const;
   Eigen::Index parameter_count() const { return parameter_count_; }

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "autodiff/on_columns.h"
+#include "fields/field_branches.h"
 #include "fields/field_type.h"
 
 namespace nfield::fields {
@@ -105,7 +106,14 @@ Field<Scalar>::Field(FieldOptions options, autodiff::SequentialOptions evaluatio
   if (options_.activation.empty()) options_.activation = type.default_activation();
   options_.validate();
   encoding_matrix_ = fields::encoding_matrix(options_.encoding, type.encoded_inputs(options_));
-  late_features_ = type.append_modules(options_, network_);
+  if (options_.branches.empty()) {
+    late_features_ = type.append_modules(options_, network_);
+  } else {
+    for (FieldBranch& branch : options_.branches)
+      if (branch.options.activation.empty()) branch.options.activation = field_type(branch.options.type).default_activation();
+    validate_branches(options_);
+    late_features_ = append_branched_network(type, options_, network_, parts_);
+  }
   scales_ = type.output_scales(options_);
   output_scale_ = type.output_scale(options_);
   all_scales_ = scales_ > 1 && type.trains_all_scales(options_);
@@ -116,19 +124,23 @@ Field<Scalar>::Field(FieldOptions options, autodiff::SequentialOptions evaluatio
 template <typename Scalar>
 void Field<Scalar>::initialize() {
   std::mt19937_64 rng(options_.seed);
-  const FieldType& type = field_type(options_.type);
-  int dense_index = 0;
+  // Each part (the field's own network, each branch, fields/field_branches.h) counts its
+  // dense layers from 0 and draws them as its own type would.
+  std::vector<int> dense(options_.branches.size() + 1, 0);
   for (size_t m = 0; m < network_.modules().size(); ++m) {
     const auto& module = parameter_owner(*network_.modules()[m]);
     if (module.parameter_count() == 0) continue;
     Scalar* p = parameters_.data() + network_.parameter_offset(m);
     if (module.initialize(p, rng)) continue;  // e.g. hash-grid tables
+    const int part = parts_.empty() ? 0 : parts_[m];
+    const FieldOptions& own = part == 0 ? options_ : options_.branches[static_cast<size_t>(part - 1)].options;
+    int& dense_index = dense[static_cast<size_t>(part)];
     const Eigen::Index in = module.input_width(), out = module.output_width();
-    const InitialBounds bounds = type.initial_bounds(options_, dense_index, in, out);
+    const InitialBounds bounds = field_type(own.type).initial_bounds(own, dense_index, in, out);
     for (Eigen::Index i = 0; i < in * out; ++i) p[i] = static_cast<Scalar>(uniform(rng, bounds.weight));
     for (Eigen::Index i = 0; i < out; ++i)
       p[in * out + i] = static_cast<Scalar>(bounds.bias > 0 ? uniform(rng, bounds.bias) : 0.0);
-    if (dense_index == 0 && late_features_) {
+    if (part == 0 && dense_index == 0 && late_features_) {
       // W is out × in column-major (fields/dense.h); the features follow the d inputs.
       const Eigen::Index d = options_.input_dim;
       std::fill(p + d * out, p + in * out, Scalar(0));

@@ -118,6 +118,7 @@ class Field {
   int scales_ = 1, output_scale_ = 0;
   bool all_scales_ = false;
   Eigen::Index extra_ = 0;
+  std::vector<int> parts_;  // with branches: each module's part (fields/field_branches.h); else empty
 };
 
 }  // namespace nfield::fields

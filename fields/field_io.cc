@@ -6,6 +6,7 @@
 
 #include "fields/dense.h"
 #include "fields/encoding_type.h"
+#include "fields/field_branches.h"
 #include "fields/field_type.h"
 
 namespace nfield::fields {
@@ -40,6 +41,7 @@ void save_field(io::H5Writer& file, const Field<Scalar>& field, const std::strin
     file.write_attribute(group, "encoding_upper", std::span<const double>(o.encoding.upper));
   }
   field_type(o.type).save(file, group, o);
+  save_branches(file, group, o);
   encoding_type(o.encoding.type).save(file, group, o.encoding);
   if (field.encoding_matrix().rows() > 0) file.write(group + "/encoding", field.encoding_matrix());
   const auto& modules = field.network().modules();
@@ -78,6 +80,7 @@ FieldOptions load_field_options(const io::H5Reader& file, const std::string& gro
   }
   encoding_type(o.encoding.type).load(file, group, o.encoding);
   field_type(o.type).load(file, group, o);
+  load_branches(file, group, o);
   return o;
 }
 

@@ -9,9 +9,12 @@
 //                               encoding_frequencies, encoding_features, encoding_axis, …,
 //                               encoding_levels, …; files from before 2026-11 carry
 //                               encoding_frequencies, _include_input, _features, _scale and
-//                               _seed for every type, and each type reads only its own)
+//                               _seed for every type, and each type reads only its own);
+//                               with branches (fields/field_branches.h) also branches and
+//                               branch_K_{type, hidden, activation, first_omega,
+//                               hidden_omega, inputs, positive}
 //   /field/layers/K/weight      out × in (as PyTorch's nn.Linear.weight), layer K = 0, 1, …
-//                               (dense layers only)
+//                               (dense layers only: the field's own, then each branch's)
 //   /field/layers/K/bias        out
 //   /field/encoding             the fixed encoding matrix B (m × d), when there is one
 //   /field/encoding_parameters  the trained parameters of an encoding, when it has any, in

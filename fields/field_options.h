@@ -31,6 +31,8 @@
 
 namespace nfield::fields {
 
+struct FieldBranch;  // below: a small network of its own beside the field's (fields/field_branches.h)
+
 struct FieldOptions {
   std::string type = "siren";         // a registered field type: siren | mlp | nerf | bacon | acorn | …
   int input_dim = 2;                  // ≥ 1 (nerf: 6)
@@ -49,9 +51,21 @@ struct FieldOptions {
   // std::any_cast in append_modules, initial_bounds, validate, write and save. Empty for the
   // built-in types.
   std::any extension;
+  // Small networks of their own whose outputs follow the field's own output_dim − branches
+  // outputs (an inverse problem's unknown fields, fields/field_branches.h). Empty: none.
+  std::vector<FieldBranch> branches;
 
   // Throws std::invalid_argument naming the field, its value and the rule.
   void validate() const;
+};
+
+// One branch: a one-output network (type siren or mlp, options.hidden, activation, omegas;
+// no encoding) of the field's input columns `inputs` (0-based, increasing), its output
+// passed through softplus when `positive`. options.input_dim = inputs.size(), output_dim = 1.
+struct FieldBranch {
+  FieldOptions options;
+  std::vector<int> inputs;
+  bool positive = false;
 };
 
 // Sorted, lower-case names of the registered field types (fields/field_type.h).

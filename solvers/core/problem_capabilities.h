@@ -15,6 +15,8 @@
 //                         fit
 //   RendersViews          nerf, autoint_nerf    `nfield render`
 //   HasInstances          fit (a family)        `nfield run` with training.meta (meta_run.h)
+//   HasFieldBranches      pde (unknown fields   setup: the field's branches
+//                         with `hidden`)
 //
 // Sampling is a pure function of the trainer's random engine and the problem's state: a
 // problem whose points depend on the field in training (NeRF's occupancy grid and importance
@@ -29,6 +31,7 @@
 
 #include <Eigen/Core>
 
+#include "fields/field_options.h"
 #include "solvers/core/problem.h"
 #include "solvers/core/solution.h"
 
@@ -59,6 +62,15 @@ class MasksError {
 };
 // The mask of a problem: its own, or every point.
 Eigen::Array<bool, Eigen::Dynamic, 1> error_mask(const Problem& problem, const Eigen::MatrixXd& x);
+
+// Outputs that are small networks of their own (an inverse problem's unknown fields with
+// `hidden`, solvers/problems/pde_unknown_fields.h): the field's branches
+// (fields/field_branches.h), its last outputs; the driver puts them into the field's options.
+class HasFieldBranches {
+ public:
+  virtual ~HasFieldBranches() = default;
+  virtual std::vector<fields::FieldBranch> field_branches() const = 0;
+};
 
 // Variances beside the inputs, for encodings that read them (integrated_positional,
 // fields/integrated_positional.h): a problem that can give each point's variance per encoded

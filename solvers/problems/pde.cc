@@ -47,7 +47,8 @@
 // evaluation. `data:` adds the measurements' loss term. An unknown constant no residual reads
 // is a warning (the data alone cannot tell it); `true:` on a known constant is an error.
 // Unknown fields (`unknown_fields: {a: {true: EXPR}}`, solvers/problems/pde_unknown_fields.h)
-// are extra outputs of the field after `outputs`, read by residuals as the outputs are.
+// are extra outputs of the field after `outputs` (or, with `hidden`, small networks of their
+// own: fields/field_branches.h), read by residuals as the outputs are.
 // Parametric fields (issue 28): `nu: {range: [a, b], sampling: uniform | log}` is an input
 // column of the domain (solvers/core/domain.h, parameters), read by name as x or t are; not with
 // `unknown`; `reference.held_out` lists the values outputs are evaluated at.
@@ -63,6 +64,7 @@
 #include "io/compiled_expression.h"
 #include "io/text.h"
 #include "solvers/conditions/condition_values.h"
+#include "solvers/core/problem_capabilities.h"
 #include "solvers/conditions/condition_list.h"
 #include "solvers/conditions/conditions.h"
 #include "solvers/conditions/hard_constraints.h"
@@ -108,7 +110,7 @@ struct ResidualSpec {
   std::optional<io::ConfigNode> node;  // for errors found later (hard conditions, duplicate names)
 };
 
-class Pde final : public Problem {
+class Pde final : public Problem, public HasFieldBranches {
  public:
   explicit Pde(const ProblemContext& context)
       : domain_(Domain::from_config(context.root.child("domain"), context.config_dir)) {
@@ -116,7 +118,7 @@ class Pde final : public Problem {
     read_outputs(root);
     own_outputs_ = outputs_.size();
     if (root.has("unknown_fields")) {
-      fields_ = PdeUnknownFields(root.child("unknown_fields"), outputs_, kReservedNames);
+      fields_ = PdeUnknownFields(root.child("unknown_fields"), outputs_, kReservedNames, domain_.input_names());
       outputs_.insert(outputs_.end(), fields_.names().begin(), fields_.names().end());
     }
     read_constants(root);
@@ -148,6 +150,7 @@ class Pde final : public Problem {
   }
 
   std::shared_ptr<UnknownConstants> unknowns() const override { return unknowns_; }
+  std::vector<fields::FieldBranch> field_branches() const override { return fields_.branches(); }
 
   const Domain& domain() const override { return domain_; }
   int output_dim() const override { return static_cast<int>(outputs_.size()); }

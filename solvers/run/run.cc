@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "fields/acorn.h"
+#include "fields/field_branches.h"
 #include "fields/field_config.h"
 #include "fields/field_io.h"
 #include "solvers/output/block_output.h"
@@ -364,6 +365,18 @@ void check_batch_keys(RunSetup& s) {
   });
 }
 
+// Unknown fields with networks of their own become the field's branches (fields/field_branches.h).
+void set_field_branches(RunSetup& s, std::vector<fields::FieldBranch> branches) {
+  if (branches.empty()) return;
+  for (fields::FieldBranch& branch : branches) branch.options.seed = s.field.seed;
+  s.field.branches = std::move(branches);
+  try {
+    fields::validate_branches(s.field);
+  } catch (const std::invalid_argument& e) {
+    throw s.root.child_or_empty("field").error("type", std::string(e.what()) + " (unknown_fields with hidden)");
+  }
+}
+
 // The setup of a config already parsed; `config` names it (and its folder is the default
 // data folder).
 RunSetup setup_run(io::ConfigNode root, const std::filesystem::path& config,
@@ -383,6 +396,7 @@ RunSetup setup_run(io::ConfigNode root, const std::filesystem::path& config,
                                               s.problem->output_dim(), s.training.seed,
                                               s.problem->domain().input_names(),
                                               s.problem->default_sine_frequencies());
+  if (const auto* branched = capability<HasFieldBranches>(*s.problem)) set_field_branches(s, branched->field_branches());
   fit_field_to_run(s);  // the encoding: input variances, domain box, stages
   s.init = read_field_init(s.root.child_or_empty("field"), s.field, s.data_dir);
   check_meta(s);
