@@ -231,8 +231,8 @@ std::vector<BadConfig> bad_configs() {
       {"PdeDataTwoNoises", pde(base) + "data: {exact: {u: \"0\", noise: 0.1, noise_std: 0.1}}\n", "noise_std: |0.1",
        "data.exact.noise_std", {"give noise or noise_std, not both"}},
       // problem: pde, unknown fields.
-      {"PdeUnknownFieldHidden", pde(base) + "unknown_fields:\n  a: {hidden: [8]}\n", "hidden: |[8]",
-       "unknown_fields.a.hidden", {"a second network of its own is not implemented"}},
+      {"PdeUnknownFieldInputsWithoutHidden", pde(base) + "unknown_fields:\n  a: {inputs: [x]}\n", "inputs: |[x]",
+       "unknown_fields.a.inputs", {"needs a network of its own"}},
       {"PdeUnknownFieldTruthWithoutReference", pde(base) + "unknown_fields:\n  a: {true: \"x\"}\n", "true: |\"x\"",
        "unknown_fields.a.true", {"a truth needs reference.exact"}},
       // YAML itself.
