@@ -31,14 +31,11 @@ template <typename Scalar>
 Timing train_once(const solvers::RunSetup& setup, int steps, bool interpreted) {
   fields::Field<Scalar> field(setup.field);
   solvers::Trainer<Scalar> trainer(*setup.problem, field, setup.training);
-  io::Expression::set_interpreter_only(interpreted);
-  io::Expression::count_evaluation_time(true);
+  const io::ExpressionTiming timing(interpreted);
   const auto start = Clock::now();
   trainer.run({});
   const double ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-  const double expression_ms = 1e3 * io::Expression::counted_seconds();
-  io::Expression::count_evaluation_time(false);
-  io::Expression::set_interpreter_only(false);
+  const double expression_ms = 1e3 * timing.seconds();
   return {ms / steps, expression_ms / steps};
 }
 

@@ -11,7 +11,7 @@
 // both alike; each side reports its median over the rounds. The step is the whole step the
 // trainer times (drawing points, building the residuals, loss and gradient, the update);
 // the expression time is the wall time inside io::Expression::evaluate during those steps
-// (Expression::count_evaluation_time). Outputs are not written.
+// (io::ExpressionTiming). Outputs are not written.
 #pragma once
 
 #include <filesystem>

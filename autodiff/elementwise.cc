@@ -57,7 +57,7 @@ void elementwise_forward(const StreamLayout& layout, const std::vector<Matrix<Sc
   require_tables(tables.size(), layout.forward_order() + 1, "elementwise_forward");
   const Eigen::Index n = z.points, width = z.width();
   y.resize(n, z.count, width);
-  y.stream(0) = tables[0];
+  y.values() = tables[0];
   if (layout.count() == 1) return;
   const auto d1 = tables[1].array();
   for (int i = 0; i < layout.tangents(); ++i)
@@ -104,8 +104,8 @@ void elementwise_backward(const StreamLayout& layout, const std::vector<Matrix<S
   const Eigen::Index n = z.points, width = z.width();
   z_adjoint.resize(n, z.count, width);
   const auto d1 = tables[1].array();
-  auto z0_bar = z_adjoint.stream(0).array();
-  z0_bar = d1 * y_adjoint.stream(0).array();
+  auto z0_bar = z_adjoint.values().array();
+  z0_bar = d1 * y_adjoint.values().array();
   if (layout.count() == 1) return;
   const auto d2 = tables[2].array();
   for (int i = 0; i < layout.tangents(); ++i) {
@@ -156,7 +156,7 @@ void elementwise_backward(const StreamLayout& layout, const std::vector<Matrix<S
         delta_bar[k].setZero(n);
       }
       powers.compute(delta);
-      auto z0c_bar = z_adjoint.stream(0).col(c).array();
+      auto z0c_bar = z_adjoint.values().col(c).array();
       for (int m = 1; m <= order; ++m)
         for (int k = m; k <= order; ++k) {
           const auto yk_bar = y_adjoint.stream(layout.taylor(p, k)).col(c).array();
@@ -187,9 +187,9 @@ void product_forward(const StreamLayout& layout, const Streams<Scalar>& a, const
   if (a.width() != b.width() || a.points != b.points || a.count != b.count)
     throw std::logic_error("product_forward: the factors' streams differ in shape");
   y.resize(a.points, a.count, a.width());
-  const auto a0 = a.stream(0).array();
-  const auto b0 = b.stream(0).array();
-  y.stream(0).array() = a0 * b0;
+  const auto a0 = a.values().array();
+  const auto b0 = b.values().array();
+  y.values().array() = a0 * b0;
   for (int i = 0; i < layout.tangents(); ++i) {
     const int s = layout.tangent(i);
     y.stream(s).array() = a.stream(s).array() * b0 + a0 * b.stream(s).array();
@@ -226,7 +226,7 @@ void product_backward(const StreamLayout& layout, const Streams<Scalar>& a, cons
     a_adjoint.stream(s).array() += c * y_bar * b.stream(t).array();
     b_adjoint.stream(t).array() += c * y_bar * a.stream(s).array();
   };
-  add(y_adjoint.stream(0).array(), 0, 0, Scalar(1));
+  add(y_adjoint.values().array(), 0, 0, Scalar(1));
   for (int i = 0; i < layout.tangents(); ++i) {
     const int s = layout.tangent(i);
     const auto y_bar = y_adjoint.stream(s).array();

@@ -109,7 +109,7 @@ void seed_input_streams(const StreamLayout& layout, const Eigen::Ref<const Matri
     throw std::invalid_argument("seed_input_streams: points have " + std::to_string(x.cols()) +
                                 " columns, the stream spec expects " + std::to_string(d));
   out.resize(n, layout.count(), d);
-  out.stream(0) = x;
+  out.values() = x;
   const StreamSpec& spec = layout.spec();
   if (point_tangents && (point_tangents->rows() != n || point_tangents->cols() != d * layout.tangents()))
     throw std::invalid_argument("seed_input_streams: per-point tangents are " +

@@ -114,6 +114,9 @@ struct Streams {
   Eigen::Index width() const { return data.cols(); }
   auto stream(int s) { return data.middleRows(s * points, points); }
   auto stream(int s) const { return data.middleRows(s * points, points); }
+  // The values: stream 0 in every layout (StreamLayout::value()).
+  auto values() { return stream(StreamLayout::value()); }
+  auto values() const { return stream(StreamLayout::value()); }
 };
 
 // Tangent directions that differ from point to point (a ray's direction along the ray):

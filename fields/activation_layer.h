@@ -28,11 +28,11 @@ class ActivationLayer final : public autodiff::Module<Scalar> {
                autodiff::SavedTensors<Scalar>* saved) const override {
     const int order = layout.forward_order();
     if (saved) {
-      function_->derivatives(in.stream(0), order + 1, *saved);
+      function_->derivatives(in.values(), order + 1, *saved);
       autodiff::elementwise_forward(layout, *saved, in, out);
     } else {
       thread_local std::vector<autodiff::Matrix<Scalar>> tables;
-      function_->derivatives(in.stream(0), order, tables);
+      function_->derivatives(in.values(), order, tables);
       autodiff::elementwise_forward(layout, tables, in, out);
     }
   }

@@ -186,7 +186,7 @@ struct BaconNetwork<Scalar>::Sink {
     const Eigen::Index out = z_bar.width(), in = a.width(), n = a.points;
     if (gradient) {
       Eigen::Map<Matrix<Scalar>>(gradient + offset, out, in).noalias() += z_bar.data.transpose() * a.data;
-      Eigen::Map<Vector<Scalar>>(gradient + offset + out * in, out) += z_bar.stream(0).colwise().sum().transpose();
+      Eigen::Map<Vector<Scalar>>(gradient + offset + out * in, out) += z_bar.values().colwise().sum().transpose();
       return;
     }
     const Matrix<Scalar> zt = z_bar.data.transpose(), at = a.data.transpose();
@@ -201,11 +201,11 @@ struct BaconNetwork<Scalar>::Sink {
   void phase(Eigen::Index offset, const Streams<Scalar>& u_bar) const {
     const Eigen::Index width = u_bar.width();
     if (gradient) {
-      Eigen::Map<Vector<Scalar>>(gradient + offset, width) += u_bar.stream(0).colwise().sum().transpose();
+      Eigen::Map<Vector<Scalar>>(gradient + offset, width) += u_bar.values().colwise().sum().transpose();
       return;
     }
     for (Eigen::Index p = 0; p < u_bar.points; ++p)
-      Eigen::Map<Vector<Scalar>>(&(*jacobian)(p, offset), width) = u_bar.stream(0).row(p).transpose();
+      Eigen::Map<Vector<Scalar>>(&(*jacobian)(p, offset), width) = u_bar.values().row(p).transpose();
   }
 };
 
@@ -264,8 +264,8 @@ void BaconNetwork<Scalar>::run_forward(const autodiff::StreamLayout& layout, con
     const Layer& layer = layers_[i];
     u.resize(n, in.count, layer.width);
     u.data.noalias() = in.data * omega_scalar_[i].transpose();
-    u.stream(0).rowwise() += Eigen::Map<const Vector<Scalar>>(params + layer.phase, layer.width).transpose();
-    sine_tables<Scalar>(u.stream(0), table_order, tables);
+    u.values().rowwise() += Eigen::Map<const Vector<Scalar>>(params + layer.phase, layer.width).transpose();
+    sine_tables<Scalar>(u.values(), table_order, tables);
     autodiff::elementwise_forward(layout, tables, u, g);
     if (i == 0) {
       z = g;
@@ -274,7 +274,7 @@ void BaconNetwork<Scalar>::run_forward(const autodiff::StreamLayout& layout, con
       const Eigen::Map<const Matrix<Scalar>> weight(params + layer.weight, layer.width, in_width);
       v.resize(n, in.count, layer.width);
       v.data.noalias() = previous.data * weight.transpose();
-      v.stream(0).rowwise() +=
+      v.values().rowwise() +=
           Eigen::Map<const Vector<Scalar>>(params + layer.weight + layer.width * in_width, layer.width).transpose();
       autodiff::product_forward(layout, g, v, z);
     }
@@ -283,7 +283,7 @@ void BaconNetwork<Scalar>::run_forward(const autodiff::StreamLayout& layout, con
       const Eigen::Map<const Matrix<Scalar>> h(params + heads_[s].offset, outputs_, layer.width);
       auto y = out.data.middleCols(static_cast<Eigen::Index>(s) * outputs_, outputs_);
       y.noalias() = z.data * h.transpose();
-      out.stream(0).middleCols(static_cast<Eigen::Index>(s) * outputs_, outputs_).rowwise() +=
+      out.values().middleCols(static_cast<Eigen::Index>(s) * outputs_, outputs_).rowwise() +=
           Eigen::Map<const Vector<Scalar>>(params + heads_[s].offset + outputs_ * layer.width, outputs_).transpose();
     }
     Matrix<Scalar>* t = &tape[i * static_cast<size_t>(stride)];

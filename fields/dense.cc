@@ -14,7 +14,7 @@ void Dense<Scalar>::forward(const autodiff::StreamLayout&, const Scalar* params,
   const Eigen::Map<const Vector<Scalar>> bias(params + out_ * in_, out_);
   out.resize(in.points, in.count, out_);
   out.data.noalias() = in.data * weight.transpose();
-  out.stream(0).rowwise() += bias.transpose();
+  out.values().rowwise() += bias.transpose();
 }
 
 template <typename Scalar>
@@ -27,7 +27,7 @@ void Dense<Scalar>::backward(const autodiff::StreamLayout&, const Scalar* params
   Eigen::Map<Matrix<Scalar>> weight_bar(gradient, out_, in_);
   Eigen::Map<Vector<Scalar>> bias_bar(gradient + out_ * in_, out_);
   weight_bar.noalias() += out_adjoint.data.transpose() * in.data;
-  bias_bar += out_adjoint.stream(0).colwise().sum().transpose();
+  bias_bar += out_adjoint.values().colwise().sum().transpose();
   if (in_adjoint) {
     in_adjoint->resize(in.points, in.count, in_);
     in_adjoint->data.noalias() = out_adjoint.data * weight;

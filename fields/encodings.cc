@@ -43,9 +43,9 @@ void FeatureEncoding<Scalar>::forward(const autodiff::StreamLayout& layout, cons
   thread_local std::vector<autodiff::Matrix<Scalar>> tables;
   z.resize(in.points, in.count, weights_.rows());
   z.data.noalias() = in.data * weights_.transpose();
-  z.stream(0).rowwise() += offsets_.row(0);
+  z.values().rowwise() += offsets_.row(0);
   const int order = layout.forward_order() + (saved ? 1 : 0);
-  function_->derivatives(z.stream(0), order, tables);
+  function_->derivatives(z.values(), order, tables);
   autodiff::elementwise_forward(layout, tables, z, y);
   out.resize(in.points, in.count, d + y.width());
   if (d > 0) out.data.leftCols(d) = in.data;

@@ -67,12 +67,12 @@ void IntegratedPositionalEncoding<Scalar>::forward(const autodiff::StreamLayout&
   thread_local std::vector<autodiff::Matrix<Scalar>> sine_tables, exp_tables;
   z.resize(in.points, in.count, m);
   z.data.noalias() = in.data.leftCols(k) * weights_.transpose();
-  z.stream(0).rowwise() += offsets_.row(0);
+  z.values().rowwise() += offsets_.row(0);
   w.resize(in.points, in.count, m);
   w.data.noalias() = in.data.rightCols(k) * damping_.transpose();
   const int order = layout.forward_order() + (saved ? 1 : 0);
-  sine_->derivatives(z.stream(0), order, sine_tables);
-  exp_->derivatives(w.stream(0), order, exp_tables);
+  sine_->derivatives(z.values(), order, sine_tables);
+  exp_->derivatives(w.values(), order, exp_tables);
   autodiff::elementwise_forward(layout, sine_tables, z, s);
   autodiff::elementwise_forward(layout, exp_tables, w, g);
   autodiff::product_forward(layout, s, g, y);

@@ -9,6 +9,7 @@
 #include <optional>
 #include <numbers>
 #include <set>
+#include <stdexcept>
 #include <utility>
 
 #include <muParser.h>
@@ -43,7 +44,7 @@ struct Evaluator {
   std::vector<double> constants;  // bound as variables, so that muparser reports their use
 };
 
-// Benchmark switches (Expression::set_interpreter_only, count_evaluation_time).
+// ExpressionTiming's state: set while one lives.
 std::atomic<bool> interpreter_only{false};
 std::atomic<bool> counting{false};
 std::atomic<long long> counted_nanoseconds{0};
@@ -275,14 +276,21 @@ std::vector<std::string> Expression::constants_used() const { return shared_->co
 
 bool Expression::compiled() const { return shared_->compiled.has_value(); }
 
-void Expression::set_interpreter_only(bool on) { interpreter_only.store(on, std::memory_order_relaxed); }
-
-void Expression::count_evaluation_time(bool on) {
-  if (on) counted_nanoseconds.store(0, std::memory_order_relaxed);
-  counting.store(on, std::memory_order_relaxed);
+ExpressionTiming::ExpressionTiming(bool interpreted) {
+  if (counting.exchange(true, std::memory_order_relaxed))
+    throw std::logic_error("ExpressionTiming: another one is alive");
+  counted_nanoseconds.store(0, std::memory_order_relaxed);
+  interpreter_only.store(interpreted, std::memory_order_relaxed);
 }
 
-double Expression::counted_seconds() { return 1e-9 * static_cast<double>(counted_nanoseconds.load(std::memory_order_relaxed)); }
+ExpressionTiming::~ExpressionTiming() {
+  interpreter_only.store(false, std::memory_order_relaxed);
+  counting.store(false, std::memory_order_relaxed);
+}
+
+double ExpressionTiming::seconds() const {
+  return 1e-9 * static_cast<double>(counted_nanoseconds.load(std::memory_order_relaxed));
+}
 
 const std::string& Expression::text() const { return shared_->text; }
 const std::vector<std::string>& Expression::variables() const { return shared_->variables; }

@@ -71,15 +71,6 @@ class Expression {
   // Whether evaluate runs the compiled tape (false: the text needs muparser).
   bool compiled() const;
 
-  // Benchmarks only, process-wide: every evaluate through muparser (on) or, where
-  // possible, the compiled form (off, the default), so that one run can time both.
-  static void set_interpreter_only(bool on);
-  // Benchmarks only, process-wide: from now on add the wall time of every evaluate to a
-  // counter (reset here; off stops counting), read by counted_seconds. Off by default; on,
-  // each call reads the clock twice.
-  static void count_evaluation_time(bool on);
-  static double counted_seconds();
-
   // Whether the expression mentions `variable` (e.g. `t` to tell time dependence).
   bool uses(std::string_view variable) const;
   // True if the expression mentions none of its variables (constants do not count).
@@ -93,6 +84,22 @@ class Expression {
   void check_columns(Eigen::Index columns) const;
   struct Shared;
   std::shared_ptr<Shared> shared_;
+};
+
+// Benchmarks and tests only: while one lives, every Expression::evaluate in the process runs
+// through muparser (interpreted) or, where the text allows, the compiled form (not
+// interpreted), and the wall time of each evaluate is summed. Process-wide because the
+// expressions being timed sit deep inside a problem's conditions and sources, where no
+// option reaches; hence a scope rather than switches: one at a time (a second while one lives
+// is std::logic_error), and its end restores the default (compiled, no clock reads).
+class ExpressionTiming {
+ public:
+  explicit ExpressionTiming(bool interpreted);
+  ~ExpressionTiming();
+  ExpressionTiming(const ExpressionTiming&) = delete;
+  ExpressionTiming& operator=(const ExpressionTiming&) = delete;
+  // Wall seconds of evaluate calls since this scope began.
+  double seconds() const;
 };
 
 }  // namespace nfield::io

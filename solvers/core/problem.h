@@ -42,8 +42,8 @@ struct OutputContext {
   // limit per input axis in cycles per unit (scales × input_dim; empty when unknown).
   int scales = 1;
   int output_scale = 0;
-  std::function<Eigen::MatrixXd(const Eigen::MatrixXd&, int)> scale_values;
-  Eigen::MatrixXd scale_cutoffs;
+  std::function<Eigen::MatrixXd(const Eigen::MatrixXd&, int)> scale_values{};
+  Eigen::MatrixXd scale_cutoffs{};
 };
 
 // What `nfield render` asks of a problem whose field renders images: the cameras of a

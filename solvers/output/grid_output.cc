@@ -54,7 +54,7 @@ double max_or_nan(double a, double b) { return std::isnan(a) || std::isnan(b) ? 
 // the run's final error to the bit: a pass that carries tangents too stacks them with the
 // values into taller products, whose rounding may differ (it did under the sanitizer build).
 Eigen::MatrixXd values_at(const StreamEvaluator& evaluate, const Domain& domain, const Eigen::MatrixXd& x) {
-  return evaluate(autodiff::StreamLayout(autodiff::StreamSpec::values(domain.input_dim())), x).stream(0);
+  return evaluate(autodiff::StreamLayout(autodiff::StreamSpec::values(domain.input_dim())), x).values();
 }
 
 // Sums of |u − u*|² and |u*|² over the points the problem's error mask keeps.
@@ -140,16 +140,17 @@ Eigen::MatrixXd blank_outside(Eigen::MatrixXd m, const Eigen::Array<bool, Eigen:
   return m;
 }
 
-// Each output u, its gradient (grad_u, from the tangent streams 1…d), |u| of a complex pair
-// and each scale's u of a multiscale field.
-void add_solution_arrays(io::PointArrays& arrays, const Eigen::MatrixXd& u, const autodiff::Streams<double>& streams,
+// Each output u, its gradient (grad_u, from the layout's d tangent streams), |u| of a complex
+// pair and each scale's u of a multiscale field.
+void add_solution_arrays(io::PointArrays& arrays, const Eigen::MatrixXd& u, const autodiff::StreamLayout& layout,
+                         const autodiff::Streams<double>& streams,
                          const std::vector<std::string>& names, const Eigen::Array<bool, Eigen::Dynamic, 1>& inside,
                          bool shaped, const OutputContext* scales, const Eigen::MatrixXd& x) {
-  const int channels = static_cast<int>(u.cols()), d = streams.count - 1;
+  const int channels = static_cast<int>(u.cols()), d = layout.tangents();
   for (int c = 0; c < channels; ++c) {
     arrays[names[c]] = u.col(c);
     Eigen::MatrixXd g(u.rows(), d);
-    for (int a = 0; a < d; ++a) g.col(a) = streams.stream(1 + a).col(c);
+    for (int a = 0; a < d; ++a) g.col(a) = streams.stream(layout.tangent(a)).col(c);
     arrays["grad_" + names[c]] = blank_outside(as_vtk_vector(g), inside, shaped);
   }
   if (channels == 2) arrays["abs_u"] = u.rowwise().norm();
@@ -242,7 +243,7 @@ GridMetrics write_grid_at(const Problem& problem, const StreamEvaluator& evaluat
     io::PointArrays arrays;
     if (shaped) arrays["inside"] = inside.cast<double>().matrix();
     const Eigen::MatrixXd u = blank(values_at(evaluate, domain, x));
-    add_solution_arrays(arrays, u, evaluate(gradient_layout, x), names, inside, shaped, scales, x);
+    add_solution_arrays(arrays, u, gradient_layout, evaluate(gradient_layout, x), names, inside, shaped, scales, x);
     if (residual_index >= 0)
       arrays["residual"] = blank(residual_at(terms[residual_index], evaluate, x, inside, residual_sq, residual_count));
     std::map<std::string, double, std::less<>> field_data;

@@ -9,15 +9,32 @@
 #include <stdexcept>
 
 #include "solvers/core/ansatz.h"
-#include "solvers/training/adaptive_refinement.h"
 #include "solvers/training/block_allocation.h"
-#include "solvers/training/causal_weighting.h"
 
 namespace nfield::solvers {
 namespace {
 
 double now_seconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+// This rank's share of a term's residual rows (points, or groups of points), and the points
+// it reads: rows [first, first + count) of x, with the share's group offsets from `first`.
+struct RankRows {
+  Eigen::Index residual_rows = 0;
+  Eigen::Index first = 0, count = 0;
+  std::vector<Eigen::Index> groups;  // empty: the term has no groups
+};
+
+RankRows rank_rows(const TermPoints& points, const Communicator& communicator) {
+  const Share share = share_of(points.residual_rows(), communicator.rank(), communicator.size());
+  RankRows rows{share.count, share.first, share.count, {}};
+  if (points.groups.empty() || share.count == 0) return rows;
+  rows.first = points.groups[share.first];
+  rows.count = points.groups[share.first + share.count] - rows.first;
+  rows.groups.assign(points.groups.begin() + share.first, points.groups.begin() + share.first + share.count + 1);
+  for (Eigen::Index& g : rows.groups) g -= rows.first;
+  return rows;
 }
 
 }  // namespace
@@ -37,19 +54,19 @@ class Trainer<Scalar>::View final : public StrategyView<Scalar> {
   explicit View(Trainer& trainer) : t_(trainer) {}
 
   long step() const override { return t_.global_step_; }
-  double term_weight(std::size_t k) const override { return t_.terms_.at(k).weight; }
-  const TermPoints& points(std::size_t k) const override { return t_.points_.at(k); }
+  double term_weight(std::size_t k) const override { return t_.terms_.at(k).term.weight; }
+  const TermPoints& points(std::size_t k) const override { return t_.terms_.at(k).points; }
   Eigen::Index parameter_count() const override { return t_.field_.parameter_count(); }
   Communicator& communicator() const override { return t_.communicator_; }
   TermPoints sample(std::size_t k, Eigen::Index n) override { return t_.sample(k, n); }
   Eigen::VectorXd squared_residuals(std::size_t k) const override {
-    return t_.squared_residuals(k, t_.points_.at(k).x, *t_.residuals_.at(k));
+    return t_.squared_residuals(k, t_.terms_.at(k).points.x, *t_.terms_.at(k).residual);
   }
   Eigen::VectorXd squared_residuals(std::size_t k, const TermPoints& points) const override {
-    return t_.squared_residuals(k, points.x, *t_.terms_.at(k).residual(points));
+    return t_.squared_residuals(k, points.x, *t_.terms_.at(k).term.residual(points));
   }
   void replace_points(std::size_t k, Eigen::MatrixXd x) override {
-    t_.points_.at(k).x = std::move(x);
+    t_.terms_.at(k).points.x = std::move(x);
     t_.set_points(k);
   }
   double term_loss(std::size_t k, double weight, Scalar* gradient) override {
@@ -68,26 +85,22 @@ Trainer<Scalar>::Trainer(const Problem& problem, fields::Field<Scalar>& field,
       communicator_(communicator ? *communicator : world_communicator()),
       options_(std::move(options)), rng_(options_.seed),
       unknowns_(problem.unknowns(), field, options_.total_steps()) {
-  terms_ = with_ansatz(problem_.loss_terms(), problem_.ansatz());  // hard conditions: u = A + D·N
-  for (const LossTerm& term : terms_) {
-    names_.push_back(term.name);
-    layouts_.emplace_back(term.spec);
+  for (LossTerm& term : with_ansatz(problem_.loss_terms(), problem_.ansatz())) {  // u = A + D·N
     if (!term.batch_key.empty() && !options_.batch.count(term.batch_key))
       throw std::invalid_argument("training.batch has no entry '" + term.batch_key +
                                   "' for loss term '" + term.name + "'");
+    names_.push_back(term.name);
+    autodiff::StreamLayout layout(term.spec);
+    TermState state{std::move(term), std::move(layout)};
+    // Seeds apart from the engine's and from each other (UnitSequence mixes them further).
+    if (options_.sampler != "uniform")
+      state.sequence.emplace(options_.sampler, options_.seed * 0x100000001B3ull + 7919 * (terms_.size() + 1));
+    terms_.push_back(std::move(state));
   }
   losses_.assign(terms_.size(), 0.0);
   strategies_ = make_training_strategies<Scalar>(options_, problem_, names_);
   // A field with a block tree (field.type: acorn) reallocates its blocks and samples them.
   if (auto blocks = make_block_allocation(field_, options_.seed, terms_.size())) strategies_.push_back(std::move(blocks));
-  if (options_.sampler != "uniform")
-    for (size_t k = 0; k < terms_.size(); ++k)
-      // Seeds apart from the engine's and from each other (UnitSequence mixes them further).
-      sequences_.emplace_back(options_.sampler, options_.seed * 0x100000001B3ull + 7919 * (k + 1));
-  points_.resize(terms_.size());
-  points_scalar_.resize(terms_.size());
-  tangents_scalar_.resize(terms_.size());
-  residuals_.resize(terms_.size());
   field_.set_evaluation({options_.block, options_.threads});
 }
 
@@ -96,15 +109,15 @@ Trainer<Scalar>::~Trainer() = default;
 
 template <typename Scalar>
 TermPoints Trainer<Scalar>::sample(size_t k, Eigen::Index n) {
-  const AttachSequence attach(rng_, sequences_.empty() ? nullptr : &sequences_[k]);
-  return terms_[k].sample(rng_, n);
+  const AttachSequence attach(rng_, terms_[k].sequence ? &*terms_[k].sequence : nullptr);
+  return terms_[k].term.sample(rng_, n);
 }
 
 template <typename Scalar>
 void Trainer<Scalar>::set_points(size_t k) {
-  points_scalar_[k] = points_[k].x.template cast<Scalar>();
-  tangents_scalar_[k] = points_[k].tangents.template cast<Scalar>();
-  residuals_[k] = terms_[k].residual(points_[k]);
+  terms_[k].x = terms_[k].points.x.template cast<Scalar>();
+  terms_[k].tangents = terms_[k].points.tangents.template cast<Scalar>();
+  terms_[k].residual = terms_[k].term.residual(terms_[k].points);
 }
 
 template <typename Scalar>
@@ -112,8 +125,8 @@ void Trainer<Scalar>::resample() {
   if (callbacks_ && callbacks_->before_draw) callbacks_->before_draw(global_step_, rng_);
   for (size_t k = 0; k < terms_.size(); ++k) {
     // A term with no batch key draws its own set (measurements: all of them, every step).
-    points_[k] = sample(k, terms_[k].batch_key.empty() ? 0 : options_.batch.at(terms_[k].batch_key));
-    for (const auto& s : strategies_) s->points_drawn(k, points_[k]);
+    terms_[k].points = sample(k, terms_[k].term.batch_key.empty() ? 0 : options_.batch.at(terms_[k].term.batch_key));
+    for (const auto& s : strategies_) s->points_drawn(k, terms_[k].points);
     set_points(k);
   }
 }
@@ -127,11 +140,11 @@ double Trainer<Scalar>::loss_scale(size_t k) const {
 
 template <typename Scalar>
 double Trainer<Scalar>::term_loss(size_t k, const Scalar* params, double weight, Scalar* gradient) {
-  const TermPoints& points = points_[k];
+  const TermPoints& points = terms_[k].points;
   const Eigen::VectorXd* point_weights = nullptr;
   for (const auto& s : strategies_)
     if ((point_weights = s->point_weights(k, points))) break;
-  const bool tangents = tangents_scalar_[k].size() > 0;
+  const bool tangents = terms_[k].tangents.size() > 0;
   // Unknown constants (trained_unknowns.h): read at params' tail, their gradient added to it.
   unknowns_.before_pass(params);
   const auto with_unknowns = [&](double loss) {
@@ -139,31 +152,22 @@ double Trainer<Scalar>::term_loss(size_t k, const Scalar* params, double weight,
     return loss;
   };
   if (!parallel()) {
-    const ResidualLoss<Scalar> loss(*residuals_[k], weight, points.residual_rows(), point_weights, 0,
+    const ResidualLoss<Scalar> loss(*terms_[k].residual, weight, points.residual_rows(), point_weights, 0,
                                     unknowns_.gradient_sink());
-    const autodiff::Batch<Scalar> batch{points_scalar_[k],
-                                        tangents ? &tangents_scalar_[k] : nullptr, points.groups};
-    return with_unknowns(field_.value_and_gradient(params, layouts_[k], batch, loss, gradient));
+    const autodiff::Batch<Scalar> batch{terms_[k].x,
+                                        tangents ? &terms_[k].tangents : nullptr, points.groups};
+    return with_unknowns(field_.value_and_gradient(params, terms_[k].layout, batch, loss, gradient));
   }
-  // This rank's residual rows, and the points they read: rows [first, first + count) of x.
-  const Share share = share_of(points.residual_rows(), communicator_.rank(), communicator_.size());
-  if (share.count == 0) return 0;
-  Eigen::Index first = share.first, count = share.count;
-  std::vector<Eigen::Index> groups;
-  if (!points.groups.empty()) {
-    first = points.groups[share.first];
-    count = points.groups[share.first + share.count] - first;
-    groups.assign(points.groups.begin() + share.first,
-                  points.groups.begin() + share.first + share.count + 1);
-    for (Eigen::Index& g : groups) g -= first;
-  }
-  const ResidualLoss<Scalar> loss(*residuals_[k], weight, points.residual_rows(), point_weights,
+  const RankRows rows = rank_rows(points, communicator_);
+  if (rows.residual_rows == 0) return 0;
+  const Eigen::Index first = rows.first, count = rows.count;
+  const ResidualLoss<Scalar> loss(*terms_[k].residual, weight, points.residual_rows(), point_weights,
                                   first, unknowns_.gradient_sink());
   autodiff::Matrix<Scalar> share_tangents;
-  if (tangents) share_tangents = tangents_scalar_[k].middleRows(first, count);
-  const autodiff::Batch<Scalar> batch{points_scalar_[k].middleRows(first, count),
-                                      tangents ? &share_tangents : nullptr, groups};
-  return with_unknowns(field_.value_and_gradient(params, layouts_[k], batch, loss, gradient));
+  if (tangents) share_tangents = terms_[k].tangents.middleRows(first, count);
+  const autodiff::Batch<Scalar> batch{terms_[k].x.middleRows(first, count),
+                                      tangents ? &share_tangents : nullptr, rows.groups};
+  return with_unknowns(field_.value_and_gradient(params, terms_[k].layout, batch, loss, gradient));
 }
 
 template <typename Scalar>
@@ -175,7 +179,7 @@ void Trainer<Scalar>::sum_over_ranks(Scalar* gradient) {
 
 template <typename Scalar>
 double Trainer<Scalar>::loss_and_gradient_at(const Scalar* params, Scalar* gradient) {
-  if (std::any_of(residuals_.begin(), residuals_.end(), [](const auto& r) { return r == nullptr; }))
+  if (!drawn())
     resample();
   return loss_and_gradient(params, gradient);
 }
@@ -184,7 +188,7 @@ template <typename Scalar>
 double Trainer<Scalar>::loss_and_gradient(const Scalar* params, Scalar* gradient) {
   Eigen::Map<autodiff::Vector<Scalar>>(gradient, field_.parameter_count()).setZero();
   for (size_t k = 0; k < terms_.size(); ++k)
-    losses_[k] = term_loss(k, params, terms_[k].weight * loss_scale(k), gradient);
+    losses_[k] = term_loss(k, params, terms_[k].term.weight * loss_scale(k), gradient);
   sum_over_ranks(gradient);
   double total = 0;
   for (double loss : losses_) total += loss;
@@ -195,13 +199,13 @@ template <typename Scalar>
 Eigen::VectorXd Trainer<Scalar>::squared_residuals(size_t k, const Eigen::MatrixXd& x,
                                                    const Residual& residual) const {
   autodiff::Streams<Scalar> out;
-  field_.evaluate(layouts_[k], x.cast<Scalar>(), out);
+  field_.evaluate(terms_[k].layout, x.cast<Scalar>(), out);
   autodiff::Streams<double> out_d;
   out_d.points = out.points;
   out_d.count = out.count;
   out_d.data = out.data.template cast<double>();
   Eigen::MatrixXd r;
-  residual.evaluate(0, layouts_[k], out_d, r);
+  residual.evaluate(0, terms_[k].layout, out_d, r);
   return r.rowwise().squaredNorm();
 }
 
@@ -209,9 +213,9 @@ template <typename Scalar>
 void Trainer<Scalar>::begin_stage() {
   field_.begin_stage(stage_);
   for (size_t k = 0; k < terms_.size(); ++k) {
-    if (!terms_[k].begin_stage) continue;
-    terms_[k].begin_stage(stage_);
-    if (residuals_[k]) residuals_[k] = terms_[k].residual(points_[k]);
+    if (!terms_[k].term.begin_stage) continue;
+    terms_[k].term.begin_stage(stage_);
+    if (terms_[k].residual) terms_[k].residual = terms_[k].term.residual(terms_[k].points);
   }
 }
 
@@ -257,18 +261,6 @@ std::vector<double> Trainer<Scalar>::balance_weights() const {
 }
 
 template <typename Scalar>
-Eigen::MatrixXd Trainer<Scalar>::adaptive_points() const {
-  const auto* adaptive = strategy<AdaptiveRefinement<Scalar>>();
-  return adaptive ? adaptive->points() : Eigen::MatrixXd();
-}
-
-template <typename Scalar>
-CausalWeights Trainer<Scalar>::causal_weights() const {
-  const auto* causal = strategy<CausalWeighting<Scalar>>();
-  return causal ? causal->weights() : CausalWeights();
-}
-
-template <typename Scalar>
 Progress Trainer<Scalar>::progress(double lr) const {
   const StageOptions& stage = options_.stages[stage_];
   Progress p;
@@ -289,7 +281,8 @@ Progress Trainer<Scalar>::progress(double lr) const {
   // A time budget ends the stage first when it is shorter than its steps would take.
   if (time_budget_ > 0) p.eta_seconds = std::min(p.eta_seconds, std::max(0.0, time_budget_ - elapsed));
   p.later_stages = static_cast<int>(options_.stages.size()) - 1 - stage_;
-  for (const TermPoints& points : points_) {
+  for (const TermState& t : terms_) {
+    const TermPoints& points = t.points;
     p.term_points.push_back(points.x.rows());
     p.term_groups.push_back(points.groups.empty() ? 0 : static_cast<Eigen::Index>(points.groups.size()) - 1);
   }
@@ -301,8 +294,7 @@ void Trainer<Scalar>::prepare_step() {
   View view(*this);
   bool redraw = false;
   for (const auto& s : strategies_) redraw = s->before_step(view) || redraw;
-  const bool drawn = std::all_of(residuals_.begin(), residuals_.end(), [](const auto& r) { return r != nullptr; });
-  if (redraw || global_step_ % options_.resample_every == 0 || !drawn) resample();
+  if (redraw || global_step_ % options_.resample_every == 0 || !drawn()) resample();
   update_weights();
 }
 
@@ -321,12 +313,12 @@ void Trainer<Scalar>::record_divergence(std::string what) {
   d.stage = stage_;
   d.optimizer = options_.stages[stage_].optimizer;
   d.what = std::move(what);
-  d.last_finite_step = last_finite_step_;
-  if (!last_finite_losses_.empty()) {
+  d.last_finite_step = watch_.last_finite_step;
+  if (!watch_.last_finite_losses.empty()) {
     d.last_finite_loss = 0;
-    for (double l : last_finite_losses_) d.last_finite_loss += l;  // in the order metrics.json sums
+    for (double l : watch_.last_finite_losses) d.last_finite_loss += l;  // in the order metrics.json sums
   }
-  divergence_ = std::move(d);
+  watch_.divergence = std::move(d);
 }
 
 template <typename Scalar>
@@ -352,14 +344,14 @@ bool Trainer<Scalar>::check_finite_parameters() {
 
 template <typename Scalar>
 bool Trainer<Scalar>::retry_after_divergence() {
-  if (!divergence_) return false;
-  if (options_.on_divergence != "restore_and_halve_lr" || divergence_retries_ >= options_.divergence_retries)
+  if (!watch_.divergence) return false;
+  if (options_.on_divergence != "restore_and_halve_lr" || watch_.retries >= options_.divergence_retries)
     return false;
-  ++divergence_retries_;
-  notice(divergence_->describe() + "; back to step " + std::to_string(divergence_->last_finite_step) +
-         "'s parameters with the learning rate halved (retry " + std::to_string(divergence_retries_) +
+  ++watch_.retries;
+  notice(watch_.divergence->describe() + "; back to step " + std::to_string(watch_.divergence->last_finite_step) +
+         "'s parameters with the learning rate halved (retry " + std::to_string(watch_.retries) +
          " of " + std::to_string(options_.divergence_retries) + ")");
-  divergence_.reset();
+  watch_.divergence.reset();
   return true;
 }
 
@@ -376,8 +368,8 @@ void Trainer<Scalar>::finish_step(double learning_rate, double milliseconds) {
   double total = 0;
   for (double l : losses_) total += l;
   if (std::isfinite(total)) {
-    last_finite_step_ = global_step_;
-    last_finite_losses_ = losses_;
+    watch_.last_finite_step = global_step_;
+    watch_.last_finite_losses = losses_;
   }
   unknowns_.after_step(global_step_);
   if (callbacks_->progress) callbacks_->progress(progress(learning_rate));
@@ -404,10 +396,10 @@ bool Trainer<Scalar>::run(const Callbacks& callbacks) {
     stage_end_ = StageEnd{};
     TrainingStage<Scalar> view(*this);
     if (!optimizer_->run(view)) {
-      if (divergence_) {
-        notice(divergence_->describe() + "; the field is kept at the last parameters whose loss was finite");
+      if (watch_.divergence) {
+        notice(watch_.divergence->describe() + "; the field is kept at the last parameters whose loss was finite");
         // The losses reported are those of the parameters kept.
-        if (!last_finite_losses_.empty()) losses_ = last_finite_losses_;
+        if (!watch_.last_finite_losses.empty()) losses_ = watch_.last_finite_losses;
       }
       return false;
     }
@@ -448,20 +440,20 @@ std::size_t TrainingStage<Scalar>::term_count() const { return trainer_.terms_.s
 template <typename Scalar>
 const std::string& TrainingStage<Scalar>::term_name(std::size_t k) const { return trainer_.names_.at(k); }
 template <typename Scalar>
-const TermPoints& TrainingStage<Scalar>::points(std::size_t k) const { return trainer_.points_.at(k); }
+const TermPoints& TrainingStage<Scalar>::points(std::size_t k) const { return trainer_.terms_.at(k).points; }
 template <typename Scalar>
 const autodiff::Matrix<Scalar>& TrainingStage<Scalar>::points_in_scalar(std::size_t k) const {
-  return trainer_.points_scalar_.at(k);
+  return trainer_.terms_.at(k).x;
 }
 template <typename Scalar>
-const Residual& TrainingStage<Scalar>::residual(std::size_t k) const { return *trainer_.residuals_.at(k); }
+const Residual& TrainingStage<Scalar>::residual(std::size_t k) const { return *trainer_.terms_.at(k).residual; }
 template <typename Scalar>
 const autodiff::StreamLayout& TrainingStage<Scalar>::layout(std::size_t k) const {
-  return trainer_.layouts_.at(k);
+  return trainer_.terms_.at(k).layout;
 }
 template <typename Scalar>
 double TrainingStage<Scalar>::weight(std::size_t k) const {
-  return trainer_.terms_.at(k).weight * trainer_.loss_scale(k);
+  return trainer_.terms_.at(k).term.weight * trainer_.loss_scale(k);
 }
 template <typename Scalar>
 void TrainingStage<Scalar>::set_term_loss(std::size_t k, double loss) { trainer_.losses_.at(k) = loss; }

@@ -137,7 +137,7 @@ class Trainer {
   // divergence (divergence() tells which; the field then holds the last parameters whose loss
   // was finite).
   bool run(const Callbacks& callbacks);
-  const std::optional<Divergence>& divergence() const { return divergence_; }
+  const std::optional<Divergence>& divergence() const { return watch_.divergence; }
 
   const std::vector<std::string>& term_names() const { return names_; }
   // Loss of each term at the last step (weighted); after a divergence, at the last step
@@ -158,7 +158,7 @@ class Trainer {
 
   // The strategies' figures, for metrics.json, in their order.
   std::vector<std::pair<std::string, double>> extra_metrics() const;
-  const Eigen::MatrixXd& points(size_t term) const { return points_[term].x; }
+  const Eigen::MatrixXd& points(size_t term) const { return terms_[term].points.x; }
   // The unknown constants' trajectory (inactive without unknowns).
   const TrainedUnknowns<Scalar>& unknowns() const { return unknowns_; }
   // The strategy of type T (such as CausalWeighting<Scalar>), or null when the run has none.
@@ -170,9 +170,6 @@ class Trainer {
   }
   // λ of each term: the product of the strategies' loss scales (1 without training.balance).
   std::vector<double> balance_weights() const;
-  // Shorthands of strategy<T>() for tests: empty when the strategy is off.
-  Eigen::MatrixXd adaptive_points() const;
-  CausalWeights causal_weights() const;
 
   void save_state(io::H5Writer& file) const;
   void load_state(const io::H5Reader& file);
@@ -181,10 +178,34 @@ class Trainer {
   friend class TrainingStage<Scalar>;
   class View;  // the StrategyView of this trainer
 
+  // One loss term as the trainer holds it: the problem's term and its stream layout, the
+  // points of the current step (in double, and in Scalar for the passes), the residual built
+  // on them (null before the first draw) and, for a quasi-random sampler, its own sequence.
+  struct TermState {
+    LossTerm term;
+    autodiff::StreamLayout layout;
+    TermPoints points{};
+    autodiff::Matrix<Scalar> x{};
+    autodiff::Matrix<Scalar> tangents{};  // empty: the spec's tangents
+    std::unique_ptr<Residual> residual{};
+    std::optional<UnitSequence> sequence{};
+  };
+  // Where the run last had a finite loss, for a divergence's report and its retries.
+  struct FiniteWatch {
+    std::optional<Divergence> divergence;  // set when a step went non-finite
+    long last_finite_step = 0;
+    std::vector<double> last_finite_losses;  // per term, at last_finite_step (empty: none yet)
+    int retries = 0;                         // taken so far (training.on_divergence)
+  };
+  bool drawn() const {
+    return std::all_of(terms_.begin(), terms_.end(), [](const TermState& t) { return t.residual != nullptr; });
+  }
+
+
   void resample();
   // n new points of term k, through its sequence.
   TermPoints sample(size_t k, Eigen::Index n);
-  void set_points(size_t k);  // the scalar copies and the residual of points_[k]
+  void set_points(size_t k);  // the Scalar copies and the residual of term k's points
   double loss_scale(size_t k) const;
   double loss_and_gradient(const Scalar* params, Scalar* gradient);
   // This rank's part of term k's loss (the whole of it with one rank).
@@ -216,20 +237,12 @@ class Trainer {
   fields::Field<Scalar>& field_;
   Communicator& communicator_;
   TrainingOptions options_;
-  std::vector<LossTerm> terms_;
-  std::vector<std::string> names_;
-  std::vector<autodiff::StreamLayout> layouts_;
-  std::vector<TermPoints> points_;
-  std::vector<autodiff::Matrix<Scalar>> points_scalar_;
-  std::vector<autodiff::Matrix<Scalar>> tangents_scalar_;  // empty: the spec's tangents
-  std::vector<std::unique_ptr<Residual>> residuals_;
+  std::vector<TermState> terms_;
+  std::vector<std::string> names_;  // the terms' names, for term_names()
   std::vector<double> losses_, stage_losses_, stage_errors_, stage_seconds_, step_ms_;
   std::vector<StageEnd> stage_ends_;
-  StageEnd stage_end_;                    // of the current stage, filled in as it ends
-  std::optional<Divergence> divergence_;  // set when a step went non-finite
-  long last_finite_step_ = 0;
-  std::vector<double> last_finite_losses_;  // per term, at last_finite_step_ (empty: none yet)
-  int divergence_retries_ = 0;            // taken so far (training.on_divergence)
+  StageEnd stage_end_;  // of the current stage, filled in as it ends
+  FiniteWatch watch_;
   std::unique_ptr<Optimizer> optimizer_;  // of the current stage, while it runs or resumes
   const Callbacks* callbacks_ = nullptr;  // of the current run()
   double time_budget_ = 0;                // of the current stage (TrainingStage::set_time_budget)
@@ -239,7 +252,6 @@ class Trainer {
   long global_step_ = 0;
   double stage_started_ = 0;     // wall clock and global step at the start of the stage
   long stage_started_step_ = 0;  // (or of the resumed part of it)
-  std::vector<UnitSequence> sequences_;   // one per term (none for uniform sampling)
   TrainingStrategies<Scalar> strategies_;
   TrainedUnknowns<Scalar> unknowns_;  // an inverse problem's unknown constants (θ's tail)
 };

@@ -24,13 +24,13 @@ void Trainer<Scalar>::save_state(io::H5Writer& file) const {
   if (optimizer_) optimizer_->save(file, "trainer");
   for (size_t k = 0; k < terms_.size(); ++k)
     // Points with a context (rays and their pixels) are drawn anew on resume.
-    if (points_[k].x.size() > 0 && !points_[k].context) {
-      file.write("trainer/points/" + std::to_string(k), points_[k].x);
-      if (!points_[k].groups.empty())
+    if (terms_[k].points.x.size() > 0 && !terms_[k].points.context) {
+      file.write("trainer/points/" + std::to_string(k), terms_[k].points.x);
+      if (!terms_[k].points.groups.empty())
         file.write("trainer/groups/" + std::to_string(k),
-                   std::vector<std::int64_t>(points_[k].groups.begin(), points_[k].groups.end()));
-      if (points_[k].tangents.size() > 0)
-        file.write("trainer/tangents/" + std::to_string(k), points_[k].tangents);
+                   std::vector<std::int64_t>(terms_[k].points.groups.begin(), terms_[k].points.groups.end()));
+      if (terms_[k].points.tangents.size() > 0)
+        file.write("trainer/tangents/" + std::to_string(k), terms_[k].points.tangents);
     }
   file.write("trainer/stage_losses", stage_losses_);
   std::vector<std::int64_t> iterations;
@@ -42,11 +42,12 @@ void Trainer<Scalar>::save_state(io::H5Writer& file) const {
     file.write_attribute("trainer", key + "_message", stage_ends_[k].message);
   }
   file.write("trainer/stage_iterations", iterations);
-  if (divergence_retries_ > 0)
-    file.write_attribute("trainer", "divergence_retries", static_cast<std::int64_t>(divergence_retries_));
+  if (watch_.retries > 0)
+    file.write_attribute("trainer", "divergence_retries", static_cast<std::int64_t>(watch_.retries));
   file.write("trainer/stage_errors", stage_errors_);
-  for (size_t k = 0; k < sequences_.size(); ++k)
-    file.write_attribute("trainer", "sequence_" + std::to_string(k), sequences_[k].state());
+  for (size_t k = 0; k < terms_.size(); ++k)
+    if (terms_[k].sequence)
+      file.write_attribute("trainer", "sequence_" + std::to_string(k), terms_[k].sequence->state());
   for (const auto& s : strategies_) s->save(file, "trainer");
   unknowns_.save(file);
 }
@@ -77,14 +78,14 @@ void Trainer<Scalar>::load_state(const io::H5Reader& file) {
   for (size_t k = 0; k < terms_.size(); ++k) {
     const std::string name = "trainer/points/" + std::to_string(k);
     if (!file.has_dataset(name)) continue;
-    points_[k] = TermPoints(file.read_matrix<double>(name));
+    terms_[k].points = TermPoints(file.read_matrix<double>(name));
     const std::string groups = "trainer/groups/" + std::to_string(k);
     if (file.has_dataset(groups)) {
       const auto g = file.read_vector<std::int64_t>(groups);
-      points_[k].groups.assign(g.data(), g.data() + g.size());
+      terms_[k].points.groups.assign(g.data(), g.data() + g.size());
     }
     const std::string tangents = "trainer/tangents/" + std::to_string(k);
-    if (file.has_dataset(tangents)) points_[k].tangents = file.read_matrix<double>(tangents);
+    if (file.has_dataset(tangents)) terms_[k].points.tangents = file.read_matrix<double>(tangents);
     set_points(k);
   }
   if (file.has_dataset("trainer/stage_losses")) {
@@ -106,7 +107,7 @@ void Trainer<Scalar>::load_state(const io::H5Reader& file) {
     for (Eigen::Index k = 0; k < it.size() && k < static_cast<Eigen::Index>(stage_ends_.size()); ++k)
       stage_ends_[k].iterations = static_cast<int>(it[k]);
   }
-  divergence_retries_ = file.has_attribute("trainer", "divergence_retries")
+  watch_.retries = file.has_attribute("trainer", "divergence_retries")
                             ? static_cast<int>(file.read_attribute<std::int64_t>("trainer", "divergence_retries"))
                             : 0;
   if (file.has_dataset("trainer/stage_errors")) {
@@ -116,10 +117,10 @@ void Trainer<Scalar>::load_state(const io::H5Reader& file) {
   // Wall times are not state (a resumed run must end bit-identical): unknown for stages run
   // before the resume.
   stage_seconds_.assign(stage_losses_.size(), std::numeric_limits<double>::quiet_NaN());
-  for (size_t k = 0; k < sequences_.size(); ++k) {
+  for (size_t k = 0; k < terms_.size(); ++k) {
     const std::string name = "sequence_" + std::to_string(k);
-    if (file.has_attribute("trainer", name))
-      sequences_[k].set_state(file.read_attribute<std::string>("trainer", name));
+    if (terms_[k].sequence && file.has_attribute("trainer", name))
+      terms_[k].sequence->set_state(file.read_attribute<std::string>("trainer", name));
   }
   for (const auto& s : strategies_) s->load(file, "trainer");
   unknowns_.load(file);

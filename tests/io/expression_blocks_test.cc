@@ -132,27 +132,34 @@ TEST(ExpressionBlocks, BlocksRemaindersMissingColumnsAndStrides) {
   EXPECT_EQ(constant.evaluate(rs), Eigen::VectorXd::Constant(300, 2 * std::numbers::pi));
 }
 
-// The benchmark switches: interpreter-only routes evaluate through muparser (where the two
-// differ in the last bit, the values change with the switch), and the clock counts.
-TEST(ExpressionBlocks, BenchmarkSwitches) {
+// ExpressionTiming: an interpreted scope routes evaluate through muparser (where the two
+// differ in the last bit, the values change with it), the clock counts only inside a scope,
+// and a second scope while one lives is refused.
+TEST(ExpressionBlocks, TimingScope) {
   const Expression e("(x + y)^7 + 3*x*7");
   const Eigen::MatrixXd points = random_points(2000, 2, 0.1, 3, 6);
   const Eigen::VectorXd muparser = e.evaluate_interpreted(points);
-  Expression::set_interpreter_only(true);
-  const Eigen::VectorXd forced = e.evaluate(points);
-  Expression::set_interpreter_only(false);
+  Eigen::VectorXd forced;
+  {
+    const ExpressionTiming interpreted(true);
+    forced = e.evaluate(points);
+  }
   EXPECT_TRUE(agree(forced, muparser, 0, "interpreter only"));
   const Eigen::VectorXd compiled = e.evaluate(points);
   EXPECT_NE(compiled, muparser) << "no last-bit difference left to tell the paths apart";
   EXPECT_TRUE(agree(compiled, muparser, 16, "compiled"));
 
-  Expression::count_evaluation_time(true);
-  for (int k = 0; k < 5; ++k) e.evaluate(points);
-  const double counted = Expression::counted_seconds();
-  Expression::count_evaluation_time(false);
-  EXPECT_GT(counted, 0.0);
-  e.evaluate(points);
-  EXPECT_EQ(Expression::counted_seconds(), counted);
+  double counted = 0;
+  {
+    const ExpressionTiming timing(false);
+    EXPECT_THROW(ExpressionTiming second(false), std::logic_error);
+    for (int k = 0; k < 5; ++k) e.evaluate(points);
+    counted = timing.seconds();
+    EXPECT_GT(counted, 0.0);
+    EXPECT_EQ(e.evaluate(points), compiled);
+  }
+  const ExpressionTiming fresh(false);  // the first scope ended: a new one starts at zero
+  EXPECT_EQ(fresh.seconds(), 0.0);
 }
 
 }  // namespace

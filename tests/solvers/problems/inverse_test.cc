@@ -23,6 +23,7 @@
 #include "solvers/training/lm_terms.h"
 #include "solvers/training/trainer.h"
 #include "tests/testing/config_errors.h"
+#include "tests/testing/resume_check.h"
 #include "tests/testing/scratch.h"
 
 namespace nfield::solvers {
@@ -127,34 +128,16 @@ TEST(InverseGradient, LevenbergMarquardtColumnsMatchCentralDifferences) {
 
 TEST(InverseResume, ResumedRunWithUnknownsIsBitExact) {
   const fs::path path = write_config(kConfig, "resume");
-  RunSetup setup = load_run(path, {});
-  fields::Field<double> full(setup.field);
-  Trainer<double> whole(*setup.problem, full, setup.training);
-  ASSERT_TRUE(whole.run({}));
-  const fs::path checkpoint = path.parent_path() / "half.h5";
-  {
-    fields::Field<double> first(setup.field);
-    Trainer<double> trainer(*setup.problem, first, setup.training);
-    typename Trainer<double>::Callbacks callbacks;
-    callbacks.stop_requested = [&trainer] { return trainer.step() >= 5; };
-    ASSERT_FALSE(trainer.run(callbacks));
-    io::H5Writer file(checkpoint);
-    fields::save_field(file, first);
-    trainer.save_state(file);
-    file.commit();
-  }
-  const io::H5Reader file(checkpoint);
-  fields::Field<double> resumed = fields::load_field<double>(file);
-  Trainer<double> trainer(*setup.problem, resumed, setup.training);
-  trainer.load_state(file);
-  ASSERT_TRUE(trainer.run({}));
-  ASSERT_EQ(resumed.parameter_count(), full.parameter_count());
-  for (Eigen::Index i = 0; i < full.parameters().size(); ++i)
-    ASSERT_EQ(resumed.parameters()(i), full.parameters()(i)) << "parameter " << i;
-  // The unknowns moved (a's own lr is 2e-2), and the trajectory came back with the checkpoint.
-  EXPECT_NE(full.parameters()(full.network_parameter_count()), std::log(1.0));
-  ASSERT_EQ(trainer.unknowns().trajectory().size(), whole.unknowns().trajectory().size());
-  EXPECT_EQ(trainer.unknowns().trajectory().back().values, whole.unknowns().trajectory().back().values);
+  const RunSetup setup = load_run(path, {});
+  ASSERT_NO_FATAL_FAILURE(testutil::expect_resume_is_bit_exact<double>(
+      setup, path.parent_path() / "half.h5", 5, [](const testutil::FinishedRuns<double>& runs) {
+        // The unknowns moved (a's own lr is 2e-2), and the trajectory came back with the checkpoint.
+        const fields::Field<double>& full = runs.whole_field;
+        EXPECT_NE(full.parameters()(full.network_parameter_count()), std::log(1.0));
+        ASSERT_EQ(runs.resumed.unknowns().trajectory().size(), runs.whole.unknowns().trajectory().size());
+        EXPECT_EQ(runs.resumed.unknowns().trajectory().back().values,
+                  runs.whole.unknowns().trajectory().back().values);
+      }));
 }
 
 // Relative Gaussian noise: noisy − clean has standard deviation noise·std(clean). With

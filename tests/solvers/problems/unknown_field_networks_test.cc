@@ -23,6 +23,7 @@
 #include "solvers/training/lm_terms.h"
 #include "solvers/training/trainer.h"
 #include "tests/testing/config_errors.h"
+#include "tests/testing/resume_check.h"
 #include "tests/testing/scratch.h"
 
 namespace nfield::solvers {
@@ -158,32 +159,12 @@ TEST(UnknownFieldNetworks, LevenbergMarquardtMatchesCentralDifferences) {
 
 TEST(UnknownFieldNetworks, ResumedRunIsBitExact) {
   const fs::path path = write_config(kConfig, "resume");
-  RunSetup setup = load_run(path, {});
-  fields::Field<double> full(setup.field);
-  Trainer<double> whole(*setup.problem, full, setup.training);
-  ASSERT_TRUE(whole.run({}));
-  const fs::path checkpoint = path.parent_path() / "half.h5";
-  {
-    fields::Field<double> first(setup.field);
-    Trainer<double> trainer(*setup.problem, first, setup.training);
-    typename Trainer<double>::Callbacks callbacks;
-    callbacks.stop_requested = [&trainer] { return trainer.step() >= 5; };
-    ASSERT_FALSE(trainer.run(callbacks));
-    io::H5Writer file(checkpoint);
-    fields::save_field(file, first);
-    trainer.save_state(file);
-    file.commit();
-  }
-  const io::H5Reader file(checkpoint);
-  fields::Field<double> resumed = fields::load_field<double>(file);
-  ASSERT_EQ(resumed.options().branches.size(), 1u);
-  EXPECT_TRUE(resumed.options().branches[0].positive);
-  Trainer<double> trainer(*setup.problem, resumed, setup.training);
-  trainer.load_state(file);
-  ASSERT_TRUE(trainer.run({}));
-  ASSERT_EQ(resumed.parameter_count(), full.parameter_count());
-  for (Eigen::Index i = 0; i < full.parameters().size(); ++i)
-    ASSERT_EQ(resumed.parameters()(i), full.parameters()(i)) << "parameter " << i;
+  const RunSetup setup = load_run(path, {});
+  ASSERT_NO_FATAL_FAILURE(testutil::expect_resume_is_bit_exact<double>(
+      setup, path.parent_path() / "half.h5", 5, [](const testutil::FinishedRuns<double>& runs) {
+        ASSERT_EQ(runs.resumed_field.options().branches.size(), 1u);
+        EXPECT_TRUE(runs.resumed_field.options().branches[0].positive);
+      }));
 }
 
 // rel_l2 of s over the output grid, untrained and after Adam and LM: it falls by at least 10

@@ -17,14 +17,29 @@
 #include "fields/field_io.h"
 #include "io/hdf5_file.h"
 #include "solvers/training/adaptive_options.h"
+#include "solvers/training/adaptive_refinement.h"
+#include "solvers/training/causal_weighting.h"
 #include "solvers/training/loss_balancing.h"
 #include "solvers/run/run.h"
 #include "solvers/sampling/random.h"
 #include "solvers/training/trainer.h"
+#include "tests/testing/resume_check.h"
 #include "tests/testing/scratch.h"
 
 namespace nfield::solvers {
 namespace {
+
+// The points RAR added so far, and the causal weights now: empty when the strategy is off.
+template <typename Scalar>
+Eigen::MatrixXd refined_points(const Trainer<Scalar>& trainer) {
+  const auto* adaptive = trainer.template strategy<AdaptiveRefinement<Scalar>>();
+  return adaptive ? adaptive->points() : Eigen::MatrixXd();
+}
+template <typename Scalar>
+CausalWeights causal_weights_of(const Trainer<Scalar>& trainer) {
+  const auto* causal = trainer.template strategy<CausalWeighting<Scalar>>();
+  return causal ? causal->weights() : CausalWeights();
+}
 
 std::filesystem::path write_config(const std::string& text, const std::string& name = "config") {
   return testutil::write_config("solvers", text, name);
@@ -171,7 +186,7 @@ TEST(Adaptive, AddsPointsWhereTheResidualPeaks) {
     Trainer<double> trainer(*setup.problem, field, setup.training);
     ASSERT_TRUE(trainer.run({}));
     // Refinements at steps 2 and 4 add 30 each; the cap keeps the newest 50.
-    const Eigen::MatrixXd& extra = trainer.adaptive_points();
+    const Eigen::MatrixXd& extra = refined_points(trainer);
     ASSERT_EQ(extra.rows(), 50) << sampler;
     for (Eigen::Index r = 0; r < extra.rows(); ++r) {
       const double d = std::hypot(extra(r, 0) - 0.7, extra(r, 1) - 0.3);
@@ -329,7 +344,7 @@ TEST(Causal, TrainerWeightsMatchTheLossesOfItsPoints) {
   Eigen::MatrixXd r;
   pde.residual(x)->evaluate(0, layout, out, r);
   const CausalWeights want = causal_weights(x.col(1), r.rowwise().squaredNorm(), 0, 1, 8, 0.01);
-  EXPECT_EQ(trainer.causal_weights().weights, want.weights);
+  EXPECT_EQ(causal_weights_of(trainer).weights, want.weights);
   EXPECT_LT(want.min_weight(), 0.999);  // the weights do something here
   EXPECT_EQ(trainer.extra_metrics().front().first, "causal_min_weight");
 }
@@ -353,11 +368,11 @@ TEST(Causal, LbfgsSegmentsUpdateWeightsAndExtraSet) {
   auto [setup12, twelve] = train(12, at12);
   EXPECT_EQ(twelve->step(), 16);
   // Refinements after L-BFGS iterations 5 and 10 (none in the 4 Adam steps).
-  ASSERT_EQ(twelve->adaptive_points().rows(), 20);
-  EXPECT_EQ(ten->adaptive_points().rows(), 10);
+  ASSERT_EQ(refined_points(*twelve).rows(), 20);
+  EXPECT_EQ(refined_points(*ten).rows(), 10);
   const Eigen::MatrixXd& x = twelve->points(0);
   ASSERT_EQ(x.rows(), 256 + 20);
-  EXPECT_EQ(Eigen::MatrixXd(x.bottomRows(20)), twelve->adaptive_points());
+  EXPECT_EQ(Eigen::MatrixXd(x.bottomRows(20)), refined_points(*twelve));
   EXPECT_EQ(Eigen::MatrixXd(x.topRows(256)), Eigen::MatrixXd(ten->points(0).topRows(256)));
   // The run of 12 updated its weights after iteration 10, at the parameters the run of 10 ended with.
   const LossTerm pde = setup12.problem->loss_terms()[0];
@@ -367,45 +382,26 @@ TEST(Causal, LbfgsSegmentsUpdateWeightsAndExtraSet) {
   Eigen::MatrixXd r;
   pde.residual(x)->evaluate(0, layout, out, r);
   const CausalWeights want = causal_weights(x.col(1), r.rowwise().squaredNorm(), 0, 1, 8, 0.01);
-  EXPECT_EQ(twelve->causal_weights().weights, want.weights);
-  EXPECT_NE(twelve->causal_weights().weights, ten->causal_weights().weights);
+  EXPECT_EQ(causal_weights_of(*twelve).weights, want.weights);
+  EXPECT_NE(causal_weights_of(*twelve).weights, causal_weights_of(*ten).weights);
 }
 
 // ---- checkpoint round trip ------------------------------------------------------------
 
 TEST(SamplingState, ResumedRunWithEverythingOnIsBitExact) {
   for (const std::string sampler : {"sobol", "halton"}) {
+    SCOPED_TRACE(sampler);
     const auto path = write_config(with(kWave, "sampler: sobol", "sampler: " + sampler), sampler);
-    RunSetup setup = load_run(path, {});
-    const auto checkpoint = path.parent_path() / (sampler + ".h5");
-    fields::Field<float> full(setup.field);
-    Trainer<float> whole(*setup.problem, full, setup.training);
-    ASSERT_TRUE(whole.run({}));
-
-    fields::Field<float> first(setup.field);
-    {
-      Trainer<float> trainer(*setup.problem, first, setup.training);
-      typename Trainer<float>::Callbacks callbacks;
-      // Step 7: after a refinement (5) and a balance update (6), between resamples (6, 9).
-      callbacks.stop_requested = [&trainer] { return trainer.step() >= 7; };
-      ASSERT_FALSE(trainer.run(callbacks));
-      io::H5Writer file(checkpoint);
-      fields::save_field(file, first);
-      trainer.save_state(file);
-      file.commit();
-    }
-    const io::H5Reader file(checkpoint);
-    fields::Field<float> resumed = fields::load_field<float>(file);
-    Trainer<float> trainer(*setup.problem, resumed, setup.training);
-    trainer.load_state(file);
-    ASSERT_TRUE(trainer.run({}));
-    for (Eigen::Index i = 0; i < full.parameters().size(); ++i)
-      ASSERT_EQ(resumed.parameters()(i), full.parameters()(i)) << sampler << " parameter " << i;
-    EXPECT_EQ(trainer.adaptive_points(), whole.adaptive_points());
-    EXPECT_EQ(trainer.adaptive_points().rows(), 25);  // 3 refinements of 10, capped
-    EXPECT_EQ(trainer.balance_weights(), whole.balance_weights());
-    EXPECT_NE(whole.balance_weights()[1], 1.0);
-    EXPECT_EQ(trainer.causal_weights().weights, whole.causal_weights().weights);
+    const RunSetup setup = load_run(path, {});
+    // Step 7: after a refinement (5) and a balance update (6), between resamples (6, 9).
+    ASSERT_NO_FATAL_FAILURE(testutil::expect_resume_is_bit_exact<float>(
+        setup, path.parent_path() / (sampler + ".h5"), 7, [](const testutil::FinishedRuns<float>& runs) {
+          EXPECT_EQ(refined_points(runs.resumed), refined_points(runs.whole));
+          EXPECT_EQ(refined_points(runs.resumed).rows(), 25);  // 3 refinements of 10, capped
+          EXPECT_EQ(runs.resumed.balance_weights(), runs.whole.balance_weights());
+          EXPECT_NE(runs.whole.balance_weights()[1], 1.0);
+          EXPECT_EQ(causal_weights_of(runs.resumed).weights, causal_weights_of(runs.whole).weights);
+        }));
   }
 }
 
