@@ -72,12 +72,17 @@
 //             grid lines: io/inside_mesh.h; the mesh must be closed)
 //             and sign_accuracy_band (the same over the grid points closer to the reference
 //             surface than 5% of its bounding-box diagonal), and sign_seconds.
+//   A field with several scales (field.type: bacon) adds surface_scale<s>.vtp/.ply per scale s
+//   (0 the coarsest) and every metric above with the suffix _scale<s>; the unsuffixed ones are
+//   the field's output scale.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <limits>
+#include <string>
 #include <unordered_map>
 
 
@@ -258,39 +263,59 @@ class Sdf final : public Problem {
                      std::vector<std::pair<std::string, double>>& metrics) const override {
     const io::Grid grid = io::make_grid(domain_.lower(), domain_.upper(), context.grid);
     const Eigen::MatrixXd x = grid.points(3);
+    write_surface(context.dir, grid, on_grid(x, context.values), "", metrics);
+    // A multiscale field (field.type: bacon): each scale's zero level set too.
+    if (context.scales > 1 && context.scale_values)
+      for (int scale = 0; scale < context.scales; ++scale) {
+        const auto values = [&](const Eigen::MatrixXd& points) { return context.scale_values(points, scale); };
+        write_surface(context.dir, grid, on_grid(x, values), "_scale" + std::to_string(scale), metrics);
+      }
+  }
+
+ private:
+  // The field's first output at the grid points x, in chunks that keep the passes' memory small.
+  template <class Values>
+  static Eigen::VectorXd on_grid(const Eigen::MatrixXd& x, const Values& values) {
     const Eigen::Index n = x.rows();
     Eigen::VectorXd u(n);
     constexpr Eigen::Index kChunk = 1 << 16;
     for (Eigen::Index start = 0; start < n; start += kChunk) {
       const Eigen::Index count = std::min(kChunk, n - start);
-      u.segment(start, count) = context.values(x.middleRows(start, count)).col(0);
+      u.segment(start, count) = values(x.middleRows(start, count)).col(0);
     }
+    return u;
+  }
+
+  // surface{suffix}.vtp and .ply: the zero level set of u on the grid, in the cloud's
+  // coordinates, and its metrics (below), each key ending in `suffix`.
+  void write_surface(const std::filesystem::path& dir, const io::Grid& grid, const Eigen::VectorXd& u,
+                     const std::string& suffix, std::vector<std::pair<std::string, double>>& all) const {
     io::TriangleMesh surface = io::extract_isosurface(grid, u, 0.0, true);
     surface.vertices = to_original(surface.vertices);
-    io::write_vtp_mesh(context.dir / "surface.vtp", surface);
-    io::write_ply(context.dir / "surface.ply", surface);
-    metrics.emplace_back("surface_vertices", static_cast<double>(surface.vertices.rows()));
-    metrics.emplace_back("surface_triangles", static_cast<double>(surface.triangles.rows()));
+    io::write_vtp_mesh(dir / ("surface" + suffix + ".vtp"), surface);
+    io::write_ply(dir / ("surface" + suffix + ".ply"), surface);
     const io::SurfaceComponents pieces = io::surface_components(surface);
+    std::vector<std::pair<std::string, double>> metrics{
+        {"surface_vertices", static_cast<double>(surface.vertices.rows())},
+        {"surface_triangles", static_cast<double>(surface.triangles.rows())}};
     metrics.emplace_back("surface_components", pieces.count);
     metrics.emplace_back("surface_largest_component_area_share", pieces.largest_area_share);
-    const double nan = std::numeric_limits<double>::quiet_NaN();
-    const char* chamfer_keys[] = {"chamfer_surface_to_mesh", "chamfer_mesh_to_surface", "chamfer_mean",
-                                  "chamfer_max", "chamfer_mean_per_diagonal", "chamfer_max_per_diagonal",
-                                  "normal_consistency"};
-    if (surface.triangles.rows() == 0) {
-      for (const char* key : chamfer_keys) metrics.emplace_back(key, nan);
+    if (surface.triangles.rows() > 0) {
+      chamfer_metrics(surface, metrics);
+      if (reference_) sign_metrics(grid, u, metrics);
+    } else {
+      const double nan = std::numeric_limits<double>::quiet_NaN();
+      for (const char* key : {"chamfer_surface_to_mesh", "chamfer_mesh_to_surface", "chamfer_mean", "chamfer_max",
+                              "chamfer_mean_per_diagonal", "chamfer_max_per_diagonal", "normal_consistency"})
+        metrics.emplace_back(key, nan);
       if (reference_) {
         metrics.emplace_back("sign_accuracy", nan);
         metrics.emplace_back("sign_accuracy_band", nan);
       }
-      return;
     }
-    chamfer_metrics(surface, metrics);
-    if (reference_) sign_metrics(grid, u, metrics);
+    for (auto& [key, value] : metrics) all.emplace_back(key + suffix, value);
   }
 
- private:
   // Chamfer distances and normal consistency of the extracted surface against the reference
   // mesh, or else against the input cloud (its points and normals).
   void chamfer_metrics(const io::TriangleMesh& surface,
