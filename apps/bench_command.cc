@@ -37,6 +37,10 @@ struct BenchOptions {
   int threads = 0;
   long block = 128;
   bool json_only = false;
+  // --widths: the table once per width w, every hidden layer w wide (as many as --hidden has).
+  std::vector<int> widths;
+  // --thread-counts: the table once per thread count (0: all), each with its own FMA peak.
+  std::vector<int> thread_counts;
 };
 
 // Peak resident memory since the last reset_peak_rss(), in MiB (Linux /proc).
@@ -151,37 +155,58 @@ StepResult bench_step(const BenchOptions& options, const std::string& op_name, l
   return result;
 }
 
-void run_bench(const BenchOptions& options) {
-  if (options.threads > 0) omp_set_num_threads(options.threads);
-  std::vector<std::string> lines;
+// One table: every operator and batch at options.hidden on the threads set now; the share
+// of the float FMA peak (apps/gemm_rate.h) measured on the same threads just before.
+void run_table(const BenchOptions& options, std::vector<std::string>& lines) {
+  const int threads = omp_get_max_threads();
+  const double peak = fma_peak_gflops(threads, 5);
+  std::string widths;
+  for (int h : options.hidden) widths += (widths.empty() ? "" : "x") + std::to_string(h);
   if (!options.json_only)
-    std::printf("SIREN %s, float, %d threads, block %ld points\n%-11s %4s %7s %12s %9s %10s %7s %9s\n",
-                [&] {
-                  std::string s;
-                  for (int h : options.hidden) s += (s.empty() ? "" : "x") + std::to_string(h);
-                  return s;
-                }().c_str(),
-                omp_get_max_threads(), options.block, "op", "dims", "batch", "step ms",
-                "GFLOP/s", "GEMM GF/s", "ratio", "peak MB");
+    std::printf("SIREN %s, float, %d threads, block %ld points, FMA peak %.1f GFLOP/s\n"
+                "%-11s %4s %7s %12s %9s %10s %7s %7s %9s\n",
+                widths.c_str(), threads, options.block, peak, "op", "dims", "batch", "step ms", "GFLOP/s",
+                "GEMM GF/s", "ratio", "peak", "peak MB");
   for (const std::string& op : options.ops)
     for (long batch : options.batches) {
       const StepResult r = bench_step(options, op, batch);
       const int dims = make_operator(op).dims;
       if (!options.json_only) {
-        std::printf("%-11s %4d %7ld %12.2f %9.1f %10.1f %6.0f%% %9.0f\n", op.c_str(), dims, batch,
-                    r.median_ms, r.gflops, r.gemm_gflops, 100 * r.gflops / r.gemm_gflops, r.peak_mb);
+        std::printf("%-11s %4d %7ld %12.2f %9.1f %10.1f %6.0f%% %6.0f%% %9.0f\n", op.c_str(), dims, batch,
+                    r.median_ms, r.gflops, r.gemm_gflops, 100 * r.gflops / r.gemm_gflops, 100 * r.gflops / peak,
+                    r.peak_mb);
         std::fflush(stdout);
       }
-      char line[512];
+      char line[640];
       std::snprintf(line, sizeof line,
-                    "{\"impl\": \"nfield\", \"op\": \"%s\", \"dims\": %d, \"batch\": %ld, "
+                    "{\"impl\": \"nfield\", \"op\": \"%s\", \"dims\": %d, \"batch\": %ld, \"hidden\": \"%s\", "
                     "\"median_step_ms\": %.3f, \"gflops\": %.2f, \"gemm_gflops\": %.2f, "
-                    "\"peak_rss_mb\": %.1f, \"threads\": %d}",
-                    op.c_str(), dims, batch, r.median_ms, r.gflops, r.gemm_gflops, r.peak_mb,
-                    omp_get_max_threads());
+                    "\"fma_peak_gflops\": %.2f, \"peak_share\": %.4f, \"peak_rss_mb\": %.1f, \"threads\": %d}",
+                    op.c_str(), dims, batch, widths.c_str(), r.median_ms, r.gflops, r.gemm_gflops, peak,
+                    r.gflops / peak, r.peak_mb, threads);
       lines.push_back(line);
       if (options.json_only) std::puts(line), std::fflush(stdout);
     }
+}
+
+void run_bench(const BenchOptions& options) {
+  std::vector<std::string> lines;
+  const int all = omp_get_max_threads();
+  std::vector<int> thread_counts = options.thread_counts;
+  if (thread_counts.empty()) thread_counts.push_back(options.threads);
+  for (int threads : thread_counts) {
+    omp_set_num_threads(threads > 0 ? threads : all);
+    if (options.widths.empty()) {
+      run_table(options, lines);
+      continue;
+    }
+    for (int width : options.widths) {
+      BenchOptions one = options;
+      one.hidden.assign(options.hidden.size(), width);
+      run_table(one, lines);
+    }
+  }
+  omp_set_num_threads(all);
   if (!options.json_only)
     for (const std::string& line : lines) std::puts(line.c_str());
 }
@@ -219,6 +244,13 @@ void add_step_options(CLI::App* bench, const BenchModes& m) {
   bench->add_option("--block", m.step->block, "Points per block of the chunked pass")
       ->check(CLI::Range(1L, 1L << 20))
       ->capture_default_str();
+  bench->add_option("--widths", m.step->widths,
+                    "The table once per width: every hidden layer this wide (as many layers as --hidden)")
+      ->check(CLI::Range(1, 4096));
+  bench->add_option("--thread-counts", m.step->thread_counts,
+                    "The table once per thread count (0: all), each with the FMA peak of its threads "
+                    "(e.g. --thread-counts 1 0); replaces --threads")
+      ->check(CLI::Range(0, 1024));
   bench->add_flag("--json", m.step->json_only, "Print only the JSON lines");
 }
 

@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <numbers>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -478,6 +479,31 @@ TEST(AccuracyBenchTest, ReportsBothSignSharesOfAnSdfCase) {
     EXPECT_EQ(row[key].get<double>(), metrics[key].get<double>()) << key;
   }
   EXPECT_LT(o.out.find("sign_accuracy_band"), o.out.rfind("{\"case\"")) << "the table has its row";
+}
+
+// nfield bench --widths --thread-counts: one JSON row per thread count, width and operator,
+// each with its hidden widths, its thread count and a share of the FMA peak measured for
+// those threads (no timing is asserted beyond the share lying in (0, 1]).
+TEST(StepBenchTest, PrintsTheShareOfThePeakPerWidthAndThreadCount) {
+  const auto dir = scratch_dir();
+  Outcome o = run_nfield({"bench", "--op", "laplacian", "wave", "--batch", "64", "--hidden", "8", "8", "--widths", "8", "16",
+                          "--thread-counts", "1", "2", "--steps", "1", "--warmup", "0", "--json"},
+                         dir, dir / "capture");
+  ASSERT_EQ(o.code, 0) << describe(o);
+  std::istringstream lines(o.out);
+  std::vector<nlohmann::json> rows;
+  for (std::string line; std::getline(lines, line);)
+    if (line.rfind("{\"impl\"", 0) == 0) rows.push_back(nlohmann::json::parse(line));
+  ASSERT_EQ(rows.size(), 8u) << o.out;  // 2 thread counts × 2 widths × 2 operators
+  for (size_t k = 0; k < rows.size(); ++k) {
+    EXPECT_EQ(rows[k]["threads"].get<int>(), k < 4 ? 1 : 2) << rows[k];
+    EXPECT_EQ(rows[k]["hidden"], (k / 2) % 2 == 0 ? "8x8" : "16x16") << rows[k];
+    EXPECT_EQ(rows[k]["op"], k % 2 == 0 ? "laplacian" : "wave") << rows[k];
+    EXPECT_GT(rows[k]["peak_share"].get<double>(), 0) << rows[k];
+    EXPECT_LE(rows[k]["peak_share"].get<double>(), 1) << rows[k];
+    EXPECT_NEAR(rows[k]["peak_share"].get<double>(),
+                rows[k]["gflops"].get<double>() / rows[k]["fma_peak_gflops"].get<double>(), 1e-3) << rows[k];
+  }
 }
 
 // nfield bench --nerf in a tiny setting on the shipped bunny config: the JSON line carries
