@@ -27,6 +27,7 @@
 #include "solvers/core/solution.h"
 #include "solvers/conditions/hard_constraints.h"
 #include "solvers/core/problem_capabilities.h"
+#include "solvers/training/communicator.h"
 #include "solvers/training/progress_printer.h"
 #include "solvers/training/trainer.h"
 #include "solvers/run/field_setup.h"
@@ -170,6 +171,19 @@ void report_unknowns(Trainer<Scalar>& trainer, const std::filesystem::path& dir,
   std::printf("%s\n", unknowns_line(*unknowns).c_str());
 }
 
+// After training, on every rank (collective): how far the ranks' parameters (the network's,
+// unknown fields' networks', unknown constants' ρ) are from rank 0's, 0 when they stayed in
+// step as the design says they must (solvers/training/communicator.h); rank 0 warns otherwise.
+template <typename Scalar>
+double parameter_spread(Communicator& communicator, const fields::Field<Scalar>& field) {
+  const double spread = spread_over_ranks(communicator, field.parameters().data(),
+                                          static_cast<std::size_t>(field.parameter_count()));
+  if (communicator.rank() == 0 && spread != 0.0)
+    std::printf("warning: the MPI ranks' parameters differ after training (summed largest difference "
+                "%.3e); the outputs are rank 0's\n", spread);
+  return spread;
+}
+
 // The output folder with the resolved config in it, before training.
 void start_output(const std::filesystem::path& dir, const std::string& config_text, int ranks) {
   std::filesystem::create_directories(dir);
@@ -244,6 +258,7 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
       // The other ranks only train; an error is rank 0's to compute and write.
       callbacks.stage_error = [] { return std::numeric_limits<double>::quiet_NaN(); };
       finished = trainer.run(callbacks);
+      parameter_spread(communicator, field);
       // Wait for rank 0's outputs: mpirun ends the whole job when one rank exits with 130.
       communicator.any(false);
       return finished ? 0 : trainer.divergence() ? kExitDiverged : 130;
@@ -253,6 +268,7 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
     });
     finished = trainer.run(callbacks);
   }
+  const double spread = parameter_spread(communicator, field);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   if (const auto& d = trainer.divergence())
     std::printf(d->last_finite_step > 0
@@ -274,6 +290,7 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
   nlohmann::ordered_json metrics =
       run_metrics(setup, trainer, field, finished, wall, grid, extra, first_step, communicator);
   report_unknowns(trainer, dir, metrics);
+  if (communicator.size() > 1) metrics["mpi_parameter_spread"] = spread;
   metrics["nfield_version"] = std::string(version());
   io::write_atomically(dir / "metrics.json", [&](const std::filesystem::path& p) {
     std::ofstream(p) << metrics.dump(2) << "\n";

@@ -3,10 +3,12 @@
 
 #include <algorithm>
 #include <climits>
+#include <cmath>
 #include <cstdlib>
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #ifdef NFIELD_WITH_MPI
 // MPI's C interface only: the deprecated C++ bindings would need their own library.
@@ -154,6 +156,32 @@ CommunicationScope::~CommunicationScope() {
 Share share_of(std::ptrdiff_t n, int rank, int size) {
   const std::ptrdiff_t base = n / size, extra = n % size;
   return {rank * base + std::min<std::ptrdiff_t>(rank, extra), base + (rank < extra ? 1 : 0)};
+}
+
+namespace {
+
+template <typename Scalar>
+double spread(Communicator& communicator, const Scalar* values, std::size_t n) {
+  if (communicator.size() == 1) return 0.0;
+  std::vector<Scalar> root(values, values + n);
+  communicator.broadcast(root.data(), n);
+  double largest = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double d = std::abs(static_cast<double>(values[i]) - static_cast<double>(root[i]));
+    if (std::isnan(d)) largest = d;  // NaN wins: max() would drop it
+    else if (!std::isnan(largest)) largest = std::max(largest, d);
+  }
+  communicator.allreduce_sum(&largest, 1);
+  return largest;
+}
+
+}  // namespace
+
+double spread_over_ranks(Communicator& communicator, const double* values, std::size_t n) {
+  return spread(communicator, values, n);
+}
+double spread_over_ranks(Communicator& communicator, const float* values, std::size_t n) {
+  return spread(communicator, values, n);
 }
 
 }  // namespace nfield::solvers

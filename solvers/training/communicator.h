@@ -101,4 +101,13 @@ struct Share {
 };
 Share share_of(std::ptrdiff_t n, int rank, int size);
 
+// Whether the ranks stayed in step: rank 0's n values are broadcast, each rank takes the
+// largest |its value − rank 0's| over the n, and these are summed over the ranks, so every
+// rank gets 0 exactly when all hold rank 0's bits (NaN where any value is NaN). Collective:
+// every rank must call it. One process: 0 with no communication. The trainer's θ (the
+// network, unknown fields' own networks and unknown constants' ρ at its tail) after
+// training: metrics.json `mpi_parameter_spread` (solvers/run/run.cc).
+double spread_over_ranks(Communicator& communicator, const double* values, std::size_t n);
+double spread_over_ranks(Communicator& communicator, const float* values, std::size_t n);
+
 }  // namespace nfield::solvers

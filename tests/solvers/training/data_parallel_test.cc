@@ -11,6 +11,7 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "solvers/run/run.h"
 #include "solvers/training/communicator.h"
@@ -164,6 +165,25 @@ TEST(DataParallel, RunsOnSeveralRanks) {
   // CTest runs this program under mpirun -np 2; on one rank the comparisons above are void.
   if (!built_with_mpi()) GTEST_SKIP() << "built without MPI";
   EXPECT_GE(world().size(), 2);
+}
+
+TEST(DataParallel, SpreadOverRanksFindsOneRankOff) {
+  // Equal values: 0. Rank r > 0 off by r·2⁻²⁰ in one value (float) or r·1e-13 (double): the
+  // sum over the ranks of each one's largest difference, on every rank.
+  const int r = world().rank(), size = world().size();
+  double off = 0;
+  for (int k = 1; k < size; ++k) off += k * 1e-13;
+  std::vector<double> d = {1.0, -2.5, 3.25};
+  EXPECT_EQ(spread_over_ranks(world(), d.data(), d.size()), 0.0);
+  d[1] += r * 1e-13;
+  EXPECT_NEAR(spread_over_ranks(world(), d.data(), d.size()), off, 1e-15);  // ulps of 2.5
+  std::vector<float> f = {1.0f, 0.5f};
+  EXPECT_EQ(spread_over_ranks(world(), f.data(), f.size()), 0.0);
+  f[0] += static_cast<float>(r) * 0x1p-20f;
+  EXPECT_EQ(spread_over_ranks(world(), f.data(), f.size()), size * (size - 1) / 2 * 0x1p-20);
+  // One process: 0, with nothing to compare.
+  SerialCommunicator serial;
+  EXPECT_EQ(spread_over_ranks(serial, d.data(), d.size()), 0.0);
 }
 
 TEST(DataParallel, ShareOfCoversEveryRowOnce) {
