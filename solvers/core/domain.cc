@@ -197,6 +197,31 @@ Eigen::MatrixXd Domain::sample_interior(Random& rng, Eigen::Index n) const {
   return x;
 }
 
+Eigen::MatrixXd Domain::sample_interior_where(Random& rng, Eigen::Index n, const io::Expression& where) const {
+  constexpr Eigen::Index kGiveUp = 1'000'000;
+  Eigen::MatrixXd out(n, input_dim());
+  Eigen::Index have = 0, drawn = 0, missed = 0;
+  double rate = 1;
+  while (have < n) {
+    if (missed >= kGiveUp)
+      throw std::runtime_error("the region '" + where.text() + "' is empty: none of " + std::to_string(missed) +
+                               " points drawn in the domain lies in it");
+    const Eigen::Index m = std::max<Eigen::Index>(64, static_cast<Eigen::Index>(1.2 * (n - have) / rate) + 16);
+    const Eigen::MatrixXd x = sample_interior(rng, m);
+    const Eigen::VectorXd keep = where.evaluate(x);
+    Eigen::Index hits = 0;
+    for (Eigen::Index r = 0; r < m && have < n; ++r)
+      if (keep(r) != 0) {
+        out.row(have++) = x.row(r);
+        ++hits;
+      }
+    drawn += m;
+    missed = hits > 0 ? 0 : missed + m;
+    rate = std::max(static_cast<double>(have) / static_cast<double>(drawn), 1e-3);
+  }
+  return out;
+}
+
 Eigen::MatrixXd Domain::sample_face(const Face& face, Random& rng, Eigen::Index n) const {
   require_box("sample_face");
   Eigen::MatrixXd x = sample_interior(rng, n);

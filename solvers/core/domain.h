@@ -42,6 +42,7 @@
 #include <Eigen/Core>
 
 #include "io/config.h"
+#include "io/expression.h"
 #include "solvers/sampling/random.h"
 
 namespace nfield::solvers {
@@ -117,6 +118,11 @@ class Domain {
   Face face(const std::string& name) const;
 
   Eigen::MatrixXd sample_interior(Random& rng, Eigen::Index n) const;
+  // n interior points where `where` (an expression over expression_variables()) is nonzero:
+  // sample_interior's points, those outside the region dropped, so uniform over the region
+  // (a sequence's points restricted to it). Throws std::runtime_error when 10⁶ candidates in
+  // a row miss the region.
+  Eigen::MatrixXd sample_interior_where(Random& rng, Eigen::Index n, const io::Expression& where) const;
   // On one face (time uniform in [t0, t1] when present).
   Eigen::MatrixXd sample_face(const Face& face, Random& rng, Eigen::Index n) const;
   // On the union of `faces`, each chosen with probability ∝ its measure.

@@ -3,6 +3,7 @@
 
 #include <array>
 #include <cstdio>
+#include <limits>
 #include <vector>
 
 #include "io/isosurface.h"
@@ -11,31 +12,23 @@
 
 namespace nfield::solvers {
 
-InsideTriangles inside_triangles(const io::Grid& grid, const Eigen::Array<bool, Eigen::Dynamic, 1>& inside) {
-  const int nx = grid.dims[0], ny = grid.dims[1];
-  std::vector<int> id(static_cast<size_t>(grid.point_count()), -1);
-  InsideTriangles out;
-  std::vector<std::array<int, 3>> tris;
-  const auto use = [&](Eigen::Index g) {
-    int& i = id[static_cast<size_t>(g)];
-    if (i < 0) {
-      i = static_cast<int>(out.grid_index.size());
-      out.grid_index.push_back(g);
-    }
-    return i;
-  };
-  for (int j = 0; j + 1 < ny; ++j)
-    for (int i = 0; i + 1 < nx; ++i) {
-      const Eigen::Index a = i + static_cast<Eigen::Index>(nx) * j, b = a + 1, c = a + nx + 1, d = a + nx;
-      // Counter-clockwise in (x, y): (a, b, c) and (a, c, d).
-      for (const auto& t : {std::array<Eigen::Index, 3>{a, b, c}, std::array<Eigen::Index, 3>{a, c, d}})
-        if (inside(t[0]) && inside(t[1]) && inside(t[2])) tris.push_back({use(t[0]), use(t[1]), use(t[2])});
-    }
-  out.triangles.resize(static_cast<Eigen::Index>(tris.size()), 3);
-  for (size_t k = 0; k < tris.size(); ++k)
-    for (int c = 0; c < 3; ++c) out.triangles(static_cast<Eigen::Index>(k), c) = tris[k][static_cast<size_t>(c)];
-  return out;
+namespace {
+
+// Rows of `m` at the grid points, then `extra`'s rows (NaN when `extra` lacks the array).
+Eigen::MatrixXd gather(const Eigen::MatrixXd& m, const std::vector<Eigen::Index>& grid_index,
+                       const Eigen::MatrixXd* extra) {
+  Eigen::MatrixXd rows(static_cast<Eigen::Index>(grid_index.size()), m.cols());
+  Eigen::Index k = 0;
+  for (size_t p = 0; p < grid_index.size(); ++p) {
+    const Eigen::Index g = grid_index[p];
+    if (g >= 0) rows.row(static_cast<Eigen::Index>(p)) = m.row(g);
+    else if (extra && extra->cols() == m.cols()) rows.row(static_cast<Eigen::Index>(p)) = extra->row(k++);
+    else rows.row(static_cast<Eigen::Index>(p)).setConstant(std::numeric_limits<double>::quiet_NaN());
+  }
+  return rows;
 }
+
+}  // namespace
 
 DomainOutput::DomainOutput(const Domain& domain, const io::Grid& grid, std::filesystem::path dir, bool series)
     : domain_(domain), grid_(grid), dir_(std::move(dir)), series_(series) {
@@ -52,22 +45,27 @@ std::filesystem::path DomainOutput::file(int k) const {
 }
 
 void DomainOutput::write(int k, double t, const io::PointArrays& grid_arrays,
-                         const Eigen::Array<bool, Eigen::Dynamic, 1>& inside, const SurfaceArrays& surface) {
+                         const Eigen::Array<bool, Eigen::Dynamic, 1>& inside, const ArraysAt& at) {
   const geometry::Geometry* g = domain_.geometry();
   if (!g) return;
   const std::filesystem::path name = file(k);
   if (domain_.space_dim() == 2) {
-    if (!triangles_) triangles_ = inside_triangles(grid_, inside);
+    if (!triangles_)
+      triangles_ = clip_triangles(
+          grid_, inside, [g](const Eigen::Vector2d& p) { return g->contains(Eigen::Vector3d(p(0), p(1), 0)); },
+          clip_tolerance(grid_));
+    const std::vector<Eigen::Index> crossings = triangles_->crossings();
+    Eigen::MatrixXd crossing_points(static_cast<Eigen::Index>(crossings.size()), 2);
+    for (size_t c = 0; c < crossings.size(); ++c)
+      crossing_points.row(static_cast<Eigen::Index>(c)) = triangles_->points.row(crossings[c]);
+    const io::PointArrays extra = crossings.empty() ? io::PointArrays{} : at(crossing_points);
     io::TriangleGrid data;
-    const Eigen::Index n = static_cast<Eigen::Index>(triangles_->grid_index.size());
-    data.points.resize(n, 3);
-    for (Eigen::Index p = 0; p < n; ++p) data.points.row(p) = grid_.point(triangles_->grid_index[static_cast<size_t>(p)]).transpose();
+    data.points = triangles_->points;
     data.triangles = triangles_->triangles;
     for (const auto& [key, m] : grid_arrays) {
-      if (key == "inside") continue;  // 1 at every kept point
-      Eigen::MatrixXd rows(n, m.cols());
-      for (Eigen::Index p = 0; p < n; ++p) rows.row(p) = m.row(triangles_->grid_index[static_cast<size_t>(p)]);
-      data.arrays[key] = std::move(rows);
+      if (key == "inside") continue;  // 1 at every point
+      const auto e = extra.find(key);
+      data.arrays[key] = gather(m, triangles_->grid_index, e == extra.end() ? nullptr : &e->second);
     }
     io::write_vtu(dir_ / name, data);
   } else {
@@ -77,7 +75,8 @@ void DomainOutput::write(int k, double t, const io::PointArrays& grid_arrays,
       for (Eigen::Index p = 0; p < minus_psi.size(); ++p) minus_psi(p) = -g->distance(grid_.point(p)).v;
       surface_ = io::extract_isosurface(grid_, minus_psi, 0.0, true);
     }
-    io::PointArrays arrays = surface_->vertices.rows() ? surface(surface_->vertices) : io::PointArrays{};
+    io::PointArrays arrays = surface_->vertices.rows() ? at(surface_->vertices) : io::PointArrays{};
+    arrays.erase("inside");
     io::write_vtp_mesh(dir_ / name, *surface_, arrays);
   }
   if (pvd_) {

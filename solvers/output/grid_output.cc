@@ -176,54 +176,68 @@ void write_solution_png(const std::filesystem::path& path, const io::Grid& grid,
   io::write_png(path, picture);
 }
 
-// The field at points of the boundary (a frame's points x): each output, and with a reference
-// exact_ and error_ (DomainOutput's surface arrays).
-io::PointArrays boundary_arrays(const Problem& problem, const StreamEvaluator& evaluate, const Eigen::MatrixXd& x) {
-  const std::vector<std::string> names = problem.output_names();
-  const Eigen::MatrixXd u = values_at(evaluate, problem.domain(), x);
-  io::PointArrays arrays;
-  const Eigen::MatrixXd exact = problem.has_exact() ? problem.exact(x) : Eigen::MatrixXd();
-  for (size_t c = 0; c < names.size(); ++c) {
-    const Eigen::Index i = static_cast<Eigen::Index>(c);
-    arrays[names[c]] = u.col(i);
-    if (problem.has_exact()) {
-      arrays["exact_" + names[c]] = exact.col(i);
-      arrays["error_" + names[c]] = u.col(i) - exact.col(i);
-    }
+// Everything written at a frame's points x (input rows), the grid's and domain.vtu's
+// crossings alike: each output u, grad_u, |u| of a pair and each scale's u; the residual;
+// exact_u and error_u; `inside` on a shaped domain; every array NaN outside.
+class FrameArrays {
+ public:
+  FrameArrays(const Problem& problem, const StreamEvaluator& evaluate, const OutputContext* scales)
+      : problem_(problem), evaluate_(evaluate), scales_(scales), terms_(problem.loss_terms()),
+        residual_index_(problem.residual_term()) {
+    const int n = problem.domain().input_dim();
+    autodiff::StreamSpec spec = autodiff::StreamSpec::values(n);
+    spec.tangents = Eigen::MatrixXd::Identity(n, problem.domain().space_dim());
+    gradient_spec_ = spec;
   }
-  return arrays;
-}
 
-// The residual of `term` at x (rows per point); its squares inside the domain are added to
-// `sum_sq` and counted in `count`.
-Eigen::MatrixXd residual_at(const LossTerm& term, const StreamEvaluator& evaluate, const Eigen::MatrixXd& x,
-                            const Eigen::Array<bool, Eigen::Dynamic, 1>& inside, double& sum_sq, Eigen::Index& count) {
-  const autodiff::StreamLayout layout(term.spec);
-  const auto residual = term.residual(x);
-  Eigen::MatrixXd r;
-  residual->evaluate(0, layout, evaluate(layout, x), r);
-  for (Eigen::Index i = 0; i < r.rows(); ++i)
-    if (inside(i)) {
-      sum_sq += r.row(i).squaredNorm();
-      ++count;
+  struct At {
+    io::PointArrays arrays;
+    Eigen::MatrixXd u, exact, residual;  // exact, residual: empty when there are none
+  };
+  At at(const Eigen::MatrixXd& x, const Eigen::Array<bool, Eigen::Dynamic, 1>& inside) const {
+    const Domain& domain = problem_.domain();
+    const bool shaped = domain.geometry() != nullptr;
+    const auto blank = [&](Eigen::MatrixXd m) { return blank_outside(std::move(m), inside, shaped); };
+    const std::vector<std::string> names = problem_.output_names();
+    At out;
+    if (shaped) out.arrays["inside"] = inside.cast<double>().matrix();
+    out.u = blank(values_at(evaluate_, domain, x));
+    const autodiff::StreamLayout gradient(gradient_spec_);
+    add_solution_arrays(out.arrays, out.u, gradient, evaluate_(gradient, x), names, inside, shaped, scales_, x);
+    if (residual_index_ >= 0) {
+      const LossTerm& term = terms_[static_cast<size_t>(residual_index_)];
+      const autodiff::StreamLayout layout(term.spec);
+      term.residual(x)->evaluate(0, layout, evaluate_(layout, x), out.residual);
+      out.arrays["residual"] = blank(out.residual);
     }
-  return r;
-}
+    if (problem_.has_exact()) {
+      out.exact = problem_.exact(x);
+      const Eigen::MatrixXd error = out.u - out.exact;  // NaN outside a shaped domain
+      for (size_t c = 0; c < names.size(); ++c) {
+        out.arrays["exact_" + names[c]] = blank(out.exact.col(static_cast<Eigen::Index>(c)));
+        out.arrays["error_" + names[c]] = error.col(static_cast<Eigen::Index>(c));
+      }
+    }
+    return out;
+  }
+
+ private:
+  const Problem& problem_;
+  const StreamEvaluator& evaluate_;
+  const OutputContext* scales_;
+  std::vector<LossTerm> terms_;
+  int residual_index_;
+  autodiff::StreamSpec gradient_spec_;
+};
 
 GridMetrics write_grid_at(const Problem& problem, const StreamEvaluator& evaluate, const OutputOptions& output,
                           const OutputContext* scales, const Eigen::VectorXd& parameters) {
   const Domain& domain = problem.domain();
-  const int d = domain.space_dim(), channels = problem.output_dim();
+  const int d = domain.space_dim();
   const io::Grid grid = io::make_grid(domain.lower(), domain.upper(), output.grid);
   const Eigen::MatrixXd space = grid.points(d);
-  const std::vector<std::string> names = problem.output_names();
   const int frames = domain.has_time() ? output.frames : 1;
-
-  autodiff::StreamSpec gradient_spec = autodiff::StreamSpec::values(domain.input_dim());
-  gradient_spec.tangents = Eigen::MatrixXd::Identity(domain.input_dim(), d);
-  const autodiff::StreamLayout gradient_layout(gradient_spec);
-  std::vector<LossTerm> terms = problem.loss_terms();
-  const int residual_index = problem.residual_term();
+  const FrameArrays arrays_at(problem, evaluate, scales);
 
   GridMetrics metrics;
   ErrorSums sums;
@@ -238,29 +252,23 @@ GridMetrics write_grid_at(const Problem& problem, const StreamEvaluator& evaluat
     // A shaped domain: the grid covers its bounding box; points outside are masked (`inside`
     // = 0) and every array there is NaN, which ParaView leaves blank (threshold on `inside`).
     const Eigen::Array<bool, Eigen::Dynamic, 1> inside = domain.contains_rows(x);
-    const bool shaped = domain.geometry() != nullptr;
-    const auto blank = [&](Eigen::MatrixXd m) { return blank_outside(std::move(m), inside, shaped); };
-    io::PointArrays arrays;
-    if (shaped) arrays["inside"] = inside.cast<double>().matrix();
-    const Eigen::MatrixXd u = blank(values_at(evaluate, domain, x));
-    add_solution_arrays(arrays, u, gradient_layout, evaluate(gradient_layout, x), names, inside, shaped, scales, x);
-    if (residual_index >= 0)
-      arrays["residual"] = blank(residual_at(terms[residual_index], evaluate, x, inside, residual_sq, residual_count));
+    const FrameArrays::At frame_at = arrays_at.at(x, inside);
+    const io::PointArrays& arrays = frame_at.arrays;
+    const Eigen::MatrixXd& u = frame_at.u;
+    for (Eigen::Index i = 0; i < frame_at.residual.rows(); ++i)
+      if (inside(i)) {
+        residual_sq += frame_at.residual.row(i).squaredNorm();
+        ++residual_count;
+      }
     std::map<std::string, double, std::less<>> field_data;
     if (problem.has_exact()) {
-      const Eigen::MatrixXd exact = problem.exact(x);
-      const Eigen::MatrixXd error = u - exact;  // NaN outside a shaped domain, not summed
       ErrorSums frame;
-      frame.add(error, exact, error_mask(problem, x) && inside);
+      frame.add(u - frame_at.exact, frame_at.exact, error_mask(problem, x) && inside);
       sums.merge(frame);
       if (domain.has_time()) {
         metrics.frame_rel_l2.push_back(frame.rel_l2());
         metrics.frame_times.push_back(t);
         field_data["rel_l2"] = frame.rel_l2();
-      }
-      for (int c = 0; c < channels; ++c) {
-        arrays["exact_" + names[c]] = blank(exact.col(c));
-        arrays["error_" + names[c]] = error.col(c);
       }
       metrics.has_error = true;
     }
@@ -275,7 +283,8 @@ GridMetrics write_grid_at(const Problem& problem, const StreamEvaluator& evaluat
     }
     on_domain.write(k, t, arrays, inside, [&](const Eigen::MatrixXd& s) {
       double frame_t;
-      return boundary_arrays(problem, evaluate, frame_points(domain, s, k, frames, &frame_t, parameters));
+      const Eigen::MatrixXd xs = frame_points(domain, s, k, frames, &frame_t, parameters);
+      return arrays_at.at(xs, Eigen::Array<bool, Eigen::Dynamic, 1>::Ones(xs.rows())).arrays;
     });
     if (output.png && k == 0 && d >= 2) write_solution_png(output.dir / "solution.png", grid, u, d);
   }
