@@ -79,7 +79,7 @@ void add_run_commands(CLI::App& app) {
   });
 
   auto eval = std::make_shared<EvalArguments>();
-  CLI::App* eval_command = app.add_subcommand("eval", "Sample a checkpoint's field onto a grid and write VTK");
+  CLI::App* eval_command = app.add_subcommand("eval", "Sample a checkpoint's field onto a grid and write VTK and metrics.json");
   eval_command->add_option("checkpoint", eval->checkpoint, "A checkpoint.h5 from nfield run")
       ->required()
       ->check(CLI::ExistingFile)

@@ -8,6 +8,7 @@
 //   l = f.laplacian(x)        # N × m
 //   s = f.streams(x, operators=[C], taylor_directions=W, taylor_order=4)  # autodiff/streams.h
 //   metrics = nfield.run("configs/poisson_2d.yaml", set={"training.stages[0].steps": 50})
+//   errors = f.evaluate("out/eval")   # as nfield eval: grid outputs, metrics.json as a dict
 //
 // Copies: points are read in place when they are a float64, Fortran-ordered (column-major)
 // N × d array, the layout of the library's Eigen matrices (np.asfortranarray(x) makes one);
@@ -289,6 +290,16 @@ void add_field_class(py::module_& m) {
                              "The resolved config of the run that wrote the checkpoint (YAML).")
       .def_property_readonly("has_ansatz",
                              [](const CheckpointField& f) { return f.ansatz_ != nullptr; })
+      .def(
+          "evaluate",
+          [](const CheckpointField& f, const std::filesystem::path& out, int grid) -> py::object {
+            const auto metrics = solvers::evaluate_checkpoint(f.path_, grid, out);
+            return py::module_::import("json").attr("loads")(metrics.dump());
+          },
+          py::arg("out"), py::arg("grid") = 64,
+          "As `nfield eval CHECKPOINT --grid GRID --out OUT`: writes the grid outputs and "
+          "metrics.json into out and returns metrics.json as a dict (a pde's reference.file "
+          "errors under the run's keys: rel_l2, max_abs_err, max_abs_err_u, ...).")
       .def("values", values, py::arg("points"), "u at N × d points: N × m.")
       .def("__call__", values, py::arg("points"))
       .def(

@@ -490,8 +490,8 @@ void render_checkpoint(const std::filesystem::path& checkpoint, const RenderRequ
   else render(fields::load_field<double>(file));
 }
 
-void evaluate_checkpoint(const std::filesystem::path& checkpoint, int grid_points,
-                         const std::filesystem::path& out_dir) {
+nlohmann::ordered_json evaluate_checkpoint(const std::filesystem::path& checkpoint, int grid_points,
+                                           const std::filesystem::path& out_dir) {
   const io::H5Reader file(checkpoint);
   RunSetup setup = checkpoint_run(file, out_dir);
   setup.output.grid.assign(setup.problem->domain().space_dim(), grid_points);
@@ -503,9 +503,16 @@ void evaluate_checkpoint(const std::filesystem::path& checkpoint, int grid_point
   const Solution solution = make_solution(field, setup.problem->ansatz());
   const OutputContext context = output_context(out_dir, solution, setup, field);
   const GridMetrics grid = write_grid_outputs(*setup.problem, solution.streams, setup.output, &context);
+  std::vector<std::pair<std::string, double>> extra;
+  setup.problem->write_outputs(context, extra);  // a reference.file's errors, printed as the run prints them
+  nlohmann::ordered_json metrics = eval_metrics(setup, grid, extra);
+  io::write_atomically(out_dir / "metrics.json", [&](const std::filesystem::path& p) {
+    std::ofstream(p) << metrics.dump(2) << "\n";
+  });
   std::printf("wrote %s", out_dir.string().c_str());
   if (grid.has_error) std::printf(" (rel_l2 %.3e, max_abs_err %.3e)", grid.rel_l2, grid.max_abs_err);
   std::printf("\n");
+  return metrics;
 }
 
 }  // namespace nfield::solvers

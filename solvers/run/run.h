@@ -20,6 +20,7 @@
 #include <optional>
 #include <string>
 #include <vector>
+#include <nlohmann/json.hpp>
 
 #include "fields/field.h"
 #include "io/hdf5_file.h"
@@ -48,9 +49,15 @@ inline constexpr int kExitDiverged = 3;
 // reached are still written).
 int execute_run(RunSetup& setup, const std::filesystem::path& resume = {});
 
-// Samples a checkpoint's field onto a grid and writes VTK (nfield eval).
-void evaluate_checkpoint(const std::filesystem::path& checkpoint, int grid_points,
-                         const std::filesystem::path& out_dir);
+// Samples a checkpoint's field onto a grid and writes VTK (nfield eval), and metrics.json
+// with the grid's errors and the problem's own figures (a pde's reference.file errors at
+// its points, the same keys and values as the run's metrics.json). The problem is rebuilt
+// from the stored config: relative data paths resolve against the folder of the config the
+// run read (the checkpoint's config_dir), and a data file gone from there is the located
+// config error it would be for `nfield run`, naming the stored config's copy in out_dir.
+// Returns what it writes to metrics.json.
+nlohmann::ordered_json evaluate_checkpoint(const std::filesystem::path& checkpoint, int grid_points,
+                                           const std::filesystem::path& out_dir);
 
 // Renders views of a radiance-field checkpoint into out_dir (nfield render): the cameras of
 // `request.poses`, or a turntable. Throws for a checkpoint whose problem renders no images.

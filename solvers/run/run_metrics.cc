@@ -124,6 +124,16 @@ nlohmann::ordered_json run_metrics(const RunSetup& setup, Trainer<Scalar>& train
   return metrics;
 }
 
+nlohmann::ordered_json eval_metrics(const RunSetup& setup, const GridMetrics& grid,
+                                    const std::vector<std::pair<std::string, double>>& extra) {
+  nlohmann::ordered_json metrics;
+  metrics["problem"] = setup.root.get<std::string>("problem");
+  add_grid_metrics(setup, grid, metrics);
+  if (setup.problem->writes_grid_outputs()) metrics["residual_rms"] = grid.residual_rms;
+  for (const auto& [key, value] : extra) metrics[key] = value;
+  return metrics;
+}
+
 template nlohmann::ordered_json run_metrics(const RunSetup&, Trainer<float>&, const fields::Field<float>&, bool, double,
                                            const GridMetrics&, const std::vector<std::pair<std::string, double>>&,
                                            long, Communicator&);

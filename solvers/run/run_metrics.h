@@ -26,4 +26,10 @@ nlohmann::ordered_json run_metrics(const RunSetup& setup, Trainer<Scalar>& train
                                    const std::vector<std::pair<std::string, double>>& extra, long first_step,
                                    Communicator& communicator);
 
+// metrics.json of `nfield eval`: the grid's errors and the problem's own figures (`extra`:
+// a reference.file's per-output errors), under the keys run_metrics gives them, so that the
+// two files compare key by key.
+nlohmann::ordered_json eval_metrics(const RunSetup& setup, const GridMetrics& grid,
+                                    const std::vector<std::pair<std::string, double>>& extra);
+
 }  // namespace nfield::solvers

@@ -364,6 +364,75 @@ TEST(EvalTest, RelativeDataPathsResolveAgainstTheOriginalConfigFolder) {
   EXPECT_TRUE(std::filesystem::exists(dir / "ev" / "solution.vti"));
 }
 
+// A pde run compared with a reference.file (two CSVs, one of a derived quantity, both named
+// relative to the config): eval, run from another folder, gives the run's per-output errors at
+// the files' points, key by key; with a file gone, eval is the located config error (exit 2)
+// and writes no outputs.
+TEST(EvalTest, ReferenceFileErrorsMatchTheRunsAndAMissingFileIsLocated) {
+  const auto dir = scratch_dir();
+  const auto project = dir / "project";
+  std::filesystem::create_directories(project / "data");
+  std::string s_table = "x,y,s\n", b_table = "x,y,b\n";
+  for (int k = 0; k < 9; ++k) {
+    const double y = 0.1 * (k + 0.5);
+    char line[160];
+    std::snprintf(line, sizeof line, "0.5,%.17g,%.17g\n", y, 0.5 * y + 0.5);  // s = a + x, a = x·y
+    s_table += line;
+    std::snprintf(line, sizeof line, "%.17g,0.5,%.17g\n", y, 0.5 * 0.5);  // b = y²
+    b_table += line;
+  }
+  write_text(project / "data" / "s.csv", s_table);
+  write_text(project / "data" / "b.csv", b_table);
+  write_text(project / "pde.yaml",
+             "problem: pde\n"
+             "domain: {lower: [0, 0], upper: [1, 1]}\n"
+             "outputs: [a, b]\n"
+             "derived: {s: \"a + x\"}\n"
+             "equation:\n"
+             "  residuals:\n"
+             "    - {name: fa, expr: \"a - x*y\"}\n"
+             "    - {name: fb, expr: \"b - y^2\"}\n"
+             "reference:\n"
+             "  file:\n"
+             "    - {file: data/s.csv, outputs: [s]}\n"
+             "    - {file: data/b.csv, outputs: [b]}\n"
+             "field: {type: siren, hidden: [8, 8], first_omega: 3, hidden_omega: 1}\n"
+             "training: {threads: 1, precision: double, batch: {interior: 32},\n"
+             "           stages: [{optimizer: adam, steps: 20, lr: 1.0e-2}]}\n"
+             "output: {grid: [5, 5], png: false}\n");
+  const auto elsewhere = dir / "elsewhere";
+  std::filesystem::create_directories(elsewhere);
+  const auto out = dir / "out";
+  Outcome o = run_nfield({"run", (project / "pde.yaml").string(), "--out", out.string()}, elsewhere,
+                         dir / "capture");
+  ASSERT_EQ(o.code, 0) << describe(o);
+  const nlohmann::json ran = read_json(out / "metrics.json");
+  o = run_nfield({"eval", (out / "checkpoint.h5").string(), "--grid", "5", "--out", (dir / "ev").string()},
+                 elsewhere, dir / "capture");
+  ASSERT_EQ(o.code, 0) << describe(o);
+  EXPECT_NE(o.out.find("reference.file, 18 points"), std::string::npos) << o.out;
+  const nlohmann::json evaluated = read_json(dir / "ev" / "metrics.json");
+  for (const char* key : {"rel_l2", "max_abs_err", "rel_l2_s", "max_abs_err_s", "rel_l2_b", "max_abs_err_b",
+                          "reference_points"}) {
+    ASSERT_TRUE(ran.contains(key) && evaluated.contains(key)) << key;
+    const double r = ran[key].get<double>(), e = evaluated[key].get<double>();
+    EXPECT_GT(r, 0) << key;  // 20 Adam steps leave an error to compare
+    EXPECT_NEAR(e, r, 1e-12 * r) << key;  // the same double field at the same points
+  }
+  EXPECT_FALSE(evaluated.contains("rel_l2_a")) << "a has no reference file";
+
+  std::filesystem::remove(project / "data" / "b.csv");
+  const auto gone = dir / "ev_gone";
+  o = run_nfield({"eval", (out / "checkpoint.h5").string(), "--grid", "5", "--out", gone.string()}, elsewhere,
+                 dir / "capture");
+  EXPECT_EQ(o.code, 2) << describe(o);
+  EXPECT_NE(o.err.find("reference.file"), std::string::npos) << describe(o);
+  EXPECT_NE(o.err.find("b.csv"), std::string::npos) << describe(o);
+  EXPECT_NE(o.err.find("config.yaml:"), std::string::npos) << describe(o);  // located in the config copy
+  EXPECT_FALSE(std::filesystem::exists(gone / "solution.vti"));
+  EXPECT_FALSE(std::filesystem::exists(gone / "metrics.json"));
+}
+
 // A parametric field (constants: {nu: {range: …}}): run and eval write each held-out value's
 // frames into its own folder, metrics.json lists each value's error and reports the worst, and
 // the frames hold the checkpoint's field at the points with the value as their ν column.

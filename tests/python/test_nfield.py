@@ -168,6 +168,60 @@ class RunTest(unittest.TestCase):
         self.assertIn("steps: 20", text)
 
 
+class ReferenceTest(unittest.TestCase):
+    """A pde run compared with a reference.file (a derived quantity in one CSV, an output in
+    another): the loaded field's errors at the files' points, by NumPy, are metrics.json's, and
+    Field.evaluate (nfield eval) returns the same; a file gone is the located config error."""
+
+    CONFIG = """problem: pde
+domain: {lower: [0, 0], upper: [1, 1]}
+outputs: [a, b]
+derived: {s: "a + x"}
+equation:
+  residuals:
+    - {name: fa, expr: "a - x*y"}
+    - {name: fb, expr: "b - y^2"}
+reference:
+  file:
+    - {file: data/s.csv, outputs: [s]}
+    - {file: data/b.csv, outputs: [b]}
+field: {type: siren, hidden: [8, 8], first_omega: 3, hidden_omega: 1}
+training: {threads: 1, precision: double, batch: {interior: 32},
+           stages: [{optimizer: adam, steps: 20, lr: 1.0e-2}]}
+output: {grid: [5, 5], png: false}
+"""
+
+    def test_errors_of_the_loaded_field_are_the_runs(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            os.makedirs(os.path.join(tmp, "data"))
+            y = 0.1 * (np.arange(9) + 0.5)
+            s_points = np.column_stack([np.full(9, 0.5), y, 0.5 * y + 0.5])
+            b_points = np.column_stack([y, np.full(9, 0.5), np.full(9, 0.25)])
+            np.savetxt(os.path.join(tmp, "data", "s.csv"), s_points, delimiter=",", header="x,y,s",
+                       comments="")
+            np.savetxt(os.path.join(tmp, "data", "b.csv"), b_points, delimiter=",", header="x,y,b",
+                       comments="")
+            config = os.path.join(tmp, "pde.yaml")
+            with open(config, "w") as f:
+                f.write(self.CONFIG)
+            out = os.path.join(tmp, "out")
+            ran = nfield.run(config, out=out)
+            field = nfield.load(os.path.join(out, "checkpoint.h5"))
+            s = field(s_points[:, :2])[:, 0] + s_points[:, 0]
+            b = field(b_points[:, :2])[:, 1]
+            self.assertAlmostEqual(ran["max_abs_err_s"], np.max(np.abs(s - s_points[:, 2])), delta=1e-12)
+            self.assertAlmostEqual(ran["max_abs_err_b"], np.max(np.abs(b - b_points[:, 2])), delta=1e-12)
+            self.assertGreater(ran["max_abs_err_s"], 0)
+            evaluated = field.evaluate(os.path.join(tmp, "ev"), grid=5)
+            for key in ("rel_l2", "max_abs_err", "rel_l2_s", "max_abs_err_s", "rel_l2_b",
+                        "max_abs_err_b", "reference_points"):
+                self.assertAlmostEqual(evaluated[key], ran[key], delta=1e-12 * ran[key], msg=key)
+            os.remove(os.path.join(tmp, "data", "b.csv"))
+            with self.assertRaisesRegex(nfield.ConfigError, r"reference\.file.*b\.csv"):
+                nfield.load(os.path.join(out, "checkpoint.h5"))
+            self.assertEqual(nfield.load(os.path.join(out, "checkpoint.h5"), ansatz=False).output_dim, 2)
+
+
 class ErrorsTest(unittest.TestCase):
     def test_bad_config_raises_the_located_message(self):
         with self.assertRaises(nfield.ConfigError) as raised:
