@@ -36,6 +36,11 @@ namespace {
 class AcornType final : public FieldTypeOf<AcornType> {
  public:
   std::string default_activation() const override { return "relu"; }
+  std::string refused_streams(const autodiff::StreamSpec& spec) const override {
+    if (spec.operators.empty() && spec.taylor_order == 0) return {};
+    return "gives the value and gradient (tangent) streams only; operator and Taylor streams "
+           "(second and higher derivatives) are not provided (fields/acorn.h)";
+  }
   void validate(const FieldOptions& o) const override {
     if (io::to_lower(o.encoding.type) != "identity")
       throw std::invalid_argument("field.encoding.type = " + o.encoding.type +

@@ -69,6 +69,9 @@ class FieldType {
   // Per scale and input axis, the band limit in cycles per unit (scales × input_dim); empty
   // when the type has none.
   virtual Eigen::MatrixXd scale_cutoffs(const FieldOptions&) const { return {}; }
+  // Why the type's fields cannot give the streams of `spec` ("gives … only; …"), empty when
+  // they can: a run is refused at config load, at field.type, when a loss term needs them.
+  virtual std::string refused_streams(const autodiff::StreamSpec& /*spec*/) const { return {}; }
 
   // Reads the type's keys of `field:` (`type`, `hidden`, `activation` and the keys every
   // field has are read elsewhere); errors are io::ConfigError at the key.

@@ -394,6 +394,18 @@ void set_field_branches(RunSetup& s, std::vector<fields::FieldBranch> branches) 
   }
 }
 
+// A field type without a stream that a loss term needs (acorn: no second derivatives) is
+// refused at field.type here, before anything is written, not at the first training step.
+void check_field_streams(const RunSetup& s) {
+  const fields::FieldType& type = fields::field_type(s.field.type);
+  for (const LossTerm& term : s.problem->loss_terms()) {
+    const std::string refusal = type.refused_streams(term.spec);
+    if (!refusal.empty())
+      throw s.root.child_or_empty("field").error(
+          "type", "'" + s.field.type + "' " + refusal + "; the loss term '" + term.name + "' needs them");
+  }
+}
+
 // The setup of a config already parsed; `config` names it (and its folder is the default
 // data folder).
 RunSetup setup_run(io::ConfigNode root, const std::filesystem::path& config,
@@ -415,6 +427,7 @@ RunSetup setup_run(io::ConfigNode root, const std::filesystem::path& config,
                                               s.problem->default_sine_frequencies());
   if (const auto* branched = capability<HasFieldBranches>(*s.problem)) set_field_branches(s, branched->field_branches());
   fit_field_to_run(s);  // the encoding: input variances, domain box, stages
+  check_field_streams(s);
   s.init = read_field_init(s.root.child_or_empty("field"), s.field, s.data_dir);
   check_meta(s);
   s.output = output_options(s.root.child_or_empty("output"), s.problem->domain(), config,

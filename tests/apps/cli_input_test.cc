@@ -164,6 +164,12 @@ std::vector<BadConfig> bad_configs() {
        {"expected one of ", "poisson", "wave", "; got 'poison'"}},
       {"BadFieldType", edit("type: siren", "type: sirenn"), "type: |sirenn", "field.type",
        {"expected one of acorn, bacon, mlp, nerf, siren; got 'sirenn'"}},
+      // A field type without the streams the equation needs: refused at its type, not mid-run.
+      {"AcornForTheLaplacian",
+       edit("  type: siren\n  hidden: [8, 8]\n  first_omega: 3\n  hidden_omega: 1\n",
+            "  type: acorn\n  hidden: [8]\n"),
+       "type: |acorn", "field.type",
+       {"'acorn' gives the value and gradient (tangent) streams only", "the loss term 'pde' needs them"}},
       {"BadActivation", edit("type: siren", "type: mlp\n  activation: swish"), "activation: |swish",
        "field.activation", {"expected one of ", "relu", "sine", "softplus", "tanh", "; got 'swish'"}},
       {"BadEncoding", edit("  hidden_omega: 1\n", "  hidden_omega: 1\n  encoding: {type: hash}\n"),

@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: MIT
 //
 // Every stream rule (value, tangents along axes and arbitrary directions, operator streams,
-// Taylor coefficients of order 1–4) of every registered activation × encoding, on random
-// small networks (hidden [8, 8], input dims 1–4, output dims 1–2), in double:
+// Taylor coefficients of order 1–4) of every registered activation × encoding, BACON and
+// ACORN, on random small networks (hidden [8, 8], input dims 1–4, output dims 1–2), in
+// double (ACORN: dims 1–3, its value and tangent streams only, and that it refuses the rest):
 //
 //   * against nested ceres::Jet (tests/testing/reference_field.h): relative error ≤ 1e-10
 //     (both sides are exact up to rounding; the worst seen is ~1e-13, and 1e-10 still
@@ -54,6 +55,7 @@ TEST_P(StreamRules, MatchNestedJets) {
     const Eigen::MatrixXd x = sample_points(ref, has_kinks(options), 5, rng);
     for (const NamedSpec& named : all_specs(d, rng)) {
       const StreamLayout layout(named.spec);
+      if (!supports(GetParam(), layout)) continue;  // refused: UnsupportedStreamsAreRefused
       const Eigen::MatrixXd actual = field_streams(field, layout, x);
       const Eigen::MatrixXd expected = reference_streams(ref, layout, x);
       const std::vector<double> scale = order_scales(layout, expected, x.rows());
@@ -71,16 +73,21 @@ TEST_P(StreamRules, MatchNestedJets) {
   }
 }
 
-// Largest Taylor growth rate along the axes: Ω = max_k (S_k / S_0)^(1/k).
-double frequency_estimate(const fields::Field<double>& field, const Eigen::MatrixXd& x) {
+// Largest Taylor growth rate along the axes: Ω = max_k (S_k / S_0)^(1/k) (k = 1 only, the
+// gradient, for a field without Taylor streams).
+double frequency_estimate(const fields::Field<double>& field, const Eigen::MatrixXd& x,
+                          bool taylor = true) {
   const int d = field.input_dim();
-  StreamSpec spec = StreamSpec::values(d);
-  spec.set_taylor(Eigen::MatrixXd::Identity(d, d), 4);
+  StreamSpec spec = StreamSpec::gradient(d);
+  if (taylor) {
+    spec = StreamSpec::values(d);
+    spec.set_taylor(Eigen::MatrixXd::Identity(d, d), 4);
+  }
   const StreamLayout layout(spec);
   const Eigen::MatrixXd s = field_streams(field, layout, x);
   const std::vector<double> scale = order_scales(layout, s, x.rows());
   double omega = 1;
-  for (int k = 1; k <= 4; ++k) omega = std::max(omega, std::pow(scale[k] / scale[0], 1.0 / k));
+  for (int k = 1; k <= std::min(4, layout.forward_order()); ++k) omega = std::max(omega, std::pow(scale[k] / scale[0], 1.0 / k));
   return omega;
 }
 
@@ -132,9 +139,15 @@ TEST_P(StreamRules, MatchFiniteDifferences) {
     const bool kinks = has_kinks(options);
     const Eigen::MatrixXd x = sample_points(ref, kinks, 4, rng);
     const Eigen::Index n = x.rows();
-    const double omega = frequency_estimate(field, x);
-    const std::vector<NamedSpec> specs = {{"axes", axes_spec(d, rng, 4)},
-                                          {"directions", directions_spec(d, rng)}};
+    const bool all_streams = unsupported_streams(GetParam()).empty();
+    const double omega = frequency_estimate(field, x, all_streams);
+    std::vector<NamedSpec> specs = {{"axes", axes_spec(d, rng, 4)},
+                                    {"directions", directions_spec(d, rng)}};
+    if (!all_streams) {  // the tangents alone, along the axes and arbitrary directions
+      specs[0].spec = StreamSpec::gradient(d);
+      specs[1].spec = StreamSpec::values(d);
+      specs[1].spec.tangents = random_matrix(d, d + 1, rng);
+    }
     for (const NamedSpec& named : specs) {
       const StreamLayout layout(named.spec);
       const StreamSpec& spec = layout.spec();
@@ -210,6 +223,30 @@ TEST_P(StreamRules, MatchFiniteDifferences) {
       }
     }
   }
+}
+
+// A field that lacks some streams refuses every layout that asks for them, saying which.
+TEST_P(StreamRules, UnsupportedStreamsAreRefused) {
+  const std::string reason = unsupported_streams(GetParam());
+  if (reason.empty()) GTEST_SKIP() << GetParam().name() << " gives every stream";
+  std::mt19937_64 rng(seed(2) + 2);
+  const fields::Field<double> field(small_options(GetParam(), 2, 1, seed(2)));
+  const Eigen::MatrixXd x = random_matrix(3, 2, rng);
+  int refused = 0;
+  for (const NamedSpec& named : all_specs(2, rng)) {
+    const StreamLayout layout(named.spec);
+    if (supports(GetParam(), layout)) continue;
+    ++refused;
+    try {
+      field_streams(field, layout, x);
+      ADD_FAILURE() << named.name << ": no error";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("operator and Taylor"), std::string::npos)
+          << named.name << ": " << e.what();
+    }
+  }
+  EXPECT_GT(refused, 0);
+  std::cout << GetParam().name() << ": operator and Taylor streams not checked: " << reason << "\n";
 }
 
 // The closed-form jets of the reference agree with the library's derivative tables applied

@@ -23,6 +23,11 @@
 //              head layers come from fields::bacon_filter_frequencies / bacon_options):
 //              z₀ = sin(Ω₀ x + φ₀), zᵢ = sin(Ωᵢ x + φᵢ) ⊙ (Wᵢ zᵢ₋₁ + bᵢ), the chosen scale's
 //              head H z_l + c; parameters per layer [Wᵢ, bᵢ (i ≥ 1)], φᵢ, then the heads
+//   acorn      written here from fields/acorn.h (only the block tree comes from the options):
+//              the block's encoder input [q, sin(2ᵏπq), cos(2ᵏπq)] through the ReLU encoder
+//              to its feature grid (in double: it does not depend on x inside a block), the
+//              multilinear interpolation of the grid at the point, then the decoder as an
+//              mlp; the encoder's parameters come first
 //
 // Activations known here are written in closed form with ceres' jet functions. An activation
 // registered later and not known here is applied through the library's own derivative
@@ -42,6 +47,7 @@
 #include <string>
 #include <vector>
 
+#include "fields/acorn.h"
 #include "fields/activations.h"
 #include "fields/bacon.h"
 #include "fields/field.h"
@@ -213,6 +219,7 @@ class ReferenceField {
       check_bacon_layout();
       return;
     }
+    acorn_ = io::to_lower(options_.type) == "acorn";
     cusp_ = io::to_lower(options_.encoding.type) == "cusp";
     hash_ = io::to_lower(options_.encoding.type) == "hash_grid";
     integrated_ = io::to_lower(options_.encoding.type) == "integrated_positional";
@@ -232,6 +239,14 @@ class ReferenceField {
       const Eigen::Index f = keys_.features_per_level;
       width = (include_input_ ? options_.input_dim : 0) + static_cast<Eigen::Index>(levels_.size()) * f;
       count = (levels_.back().first_row + levels_.back().rows) * f;
+      table_count_ = count;
+    }
+    if (acorn_) {
+      include_input_ = false;
+      acorn_widths_ = acorn_encoder_widths();
+      width = fields::acorn_options(options_).features;
+      for (size_t l = 1; l < acorn_widths_.size(); ++l)
+        count += static_cast<Eigen::Index>(acorn_widths_[l]) * (acorn_widths_[l - 1] + 1);
       table_count_ = count;
     }
     for (int h : options_.hidden) {
@@ -372,6 +387,8 @@ class ReferenceField {
         if (pre) pre->push_back(value_of(z));
         a.push_back(value_of(z) < 0 ? -z : z);
       }
+    } else if (acorn_) {
+      a = acorn(x, pre);
     } else if (hash_) {
       const std::vector<T> features = hash_grid(x, pre);
       a.insert(a.end(), features.begin(), features.end());
@@ -479,12 +496,99 @@ class ReferenceField {
     return out;
   }
 
+  // acorn's encoder widths: input (d + 1)(1 + 2K), hidden…, C·G^d.
+  std::vector<int> acorn_encoder_widths() const {
+    const fields::AcornOptions& a = fields::acorn_options(options_);
+    std::vector<int> w{(options_.input_dim + 1) * (1 + 2 * a.encoder_octaves)};
+    w.insert(w.end(), a.encoder_hidden.begin(), a.encoder_hidden.end());
+    int grid = a.features;
+    for (int j = 0; j < options_.input_dim; ++j) grid *= a.grid;
+    w.push_back(grid);
+    return w;
+  }
+
+  // The feature grid of block b, Φ[v·C + c] with v = Σ_j v_j G^j: q = (the block's centre
+  // in [−1, 1]^d, 2·level/max_level − 1), [q, sin(2ᵏπq), cos(2ᵏπq)] octave after octave,
+  // W a + b with ReLU after every layer but the last.
+  // With `pre`, the encoder's hidden pre-activations (ReLU kinks in the parameters).
+  std::vector<double> acorn_grid(int b, std::vector<double>* pre) const {
+    const fields::AcornOptions& o = fields::acorn_options(options_);
+    const fields::BlockTree& tree = *o.tree;
+    const int d = options_.input_dim, n = d + 1;
+    std::vector<double> q(n);
+    for (int j = 0; j < d; ++j) q[j] = 2 * (tree.lower(b, j) + tree.size(b) / 2) - 1;
+    q[d] = o.max_level > 0 ? 2.0 * tree.blocks()[static_cast<size_t>(b)].level / o.max_level - 1 : 0;
+    std::vector<double> a = q, sines, cosines;
+    for (int k = 0; k < o.encoder_octaves; ++k) {
+      for (int j = 0; j < n; ++j) a.push_back(std::sin(std::ldexp(std::numbers::pi, k) * q[j]));
+      for (int j = 0; j < n; ++j) a.push_back(std::cos(std::ldexp(std::numbers::pi, k) * q[j]));
+    }
+    const double* p = parameters_.data();
+    for (size_t l = 1; l < acorn_widths_.size(); ++l) {
+      const int in = acorn_widths_[l - 1], out = acorn_widths_[l];
+      std::vector<double> z(out);
+      for (int r = 0; r < out; ++r) {
+        double acc = p[static_cast<Eigen::Index>(out) * in + r];
+        for (int c = 0; c < in; ++c) acc += p[static_cast<Eigen::Index>(c) * out + r] * a[c];
+        const bool hidden = l + 1 < acorn_widths_.size();
+        if (pre && hidden) pre->push_back(acc);
+        z[r] = hidden ? std::max(acc, 0.0) : acc;
+      }
+      p += static_cast<Eigen::Index>(out) * (in + 1);
+      a = std::move(z);
+    }
+    return a;
+  }
+
+  // γ(x) = Σ_v Π_j (s_j if v_j = c_j + 1 else 1 − s_j) Φ_b[v]: p_j = (u_j − o_j)/h (G − 1)
+  // with u the point in the unit cube, c_j = min(⌊p_j⌋, G − 2) (0 below the box), s = p − c.
+  // Kinks: every cell face and block face is a zero of sin(π p_j).
+  template <typename T>
+  std::vector<T> acorn(const std::vector<T>& x, std::vector<double>* pre) const {
+    const fields::AcornOptions& o = fields::acorn_options(options_);
+    const fields::BlockTree& tree = *o.tree;
+    const fields::EncodingOptions& e = options_.encoding;
+    const int d = options_.input_dim, g = o.grid, channels = o.features;
+    std::vector<T> u(d);
+    double uv[3];
+    for (int j = 0; j < d; ++j) {
+      const double lo = e.lower.empty() ? 0.0 : e.lower[j];
+      const double range = e.upper.empty() ? 1.0 : e.upper[j] - lo;
+      u[j] = (x[j] - constant<T>(lo)) * constant<T>(1 / range);
+      uv[j] = value_of(u[j]);
+    }
+    const int b = tree.locate(uv);
+    const std::vector<double> grid = acorn_grid(b, pre);
+    std::vector<int> cell(d);
+    std::vector<T> s(d);
+    for (int j = 0; j < d; ++j) {
+      const T p = (u[j] - constant<T>(tree.lower(b, j))) * constant<T>((g - 1) / tree.size(b));
+      if (pre) pre->push_back(std::sin(std::numbers::pi * value_of(p)));
+      cell[j] = std::min(std::max(static_cast<int>(std::floor(value_of(p))), 0), g - 2);
+      s[j] = p - constant<T>(cell[j]);
+    }
+    std::vector<T> out(channels, constant<T>(0.0));
+    for (int corner = 0; corner < (1 << d); ++corner) {
+      T w = constant<T>(1.0);
+      int v = 0, stride = 1;
+      for (int j = 0; j < d; ++j, stride *= g) {
+        const bool up = (corner >> j) & 1;
+        w = w * (up ? s[j] : constant<T>(1.0) - s[j]);
+        v += (cell[j] + (up ? 1 : 0)) * stride;
+      }
+      for (int c = 0; c < channels; ++c)
+        out[c] = out[c] + w * constant<T>(grid[static_cast<size_t>(v * channels + c)]);
+    }
+    return out;
+  }
+
   fields::FieldOptions options_;
   AnyEncoding keys_ = any_encoding(options_.encoding);  // the encoding's own options
   Eigen::VectorXd parameters_;
   Eigen::MatrixXd encoding_;
   std::vector<Eigen::MatrixXd> omega_;  // bacon's filter frequencies
-  bool bacon_ = false;
+  bool bacon_ = false, acorn_ = false;
+  std::vector<int> acorn_widths_;
   bool siren_ = true, cusp_ = false, hash_ = false, integrated_ = false, include_input_ = true;
   std::vector<fields::HashGridLevel> levels_;
   Eigen::Index table_count_ = 0;

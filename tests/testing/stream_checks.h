@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "autodiff/streams.h"
+#include "fields/acorn.h"
 #include "fields/activations.h"
 #include "fields/bacon.h"
 #include "fields/encoding_type.h"
@@ -262,9 +263,12 @@ inline Eigen::MatrixXd reference_streams(const ReferenceField& ref, const Stream
 // registered encoding, and with each variant of an encoding that has some (hash_grid's
 // interpolations beyond the default case's smoothstep). A newly registered activation or
 // encoding becomes a case by itself.
+// BACON and ACORN (their own modules) are cases too; ACORN gives the value and tangent
+// streams only, and the tests check those and that it refuses the others
+// (unsupported_streams below).
 
 struct NetworkCase {
-  std::string type;        // siren | mlp | bacon
+  std::string type;        // siren | mlp | bacon | acorn
   std::string activation;  // mlp's activation ("sine" for siren)
   std::string encoding;
   std::string variant = {};  // hash_grid: the interpolation, empty for smoothstep
@@ -291,12 +295,29 @@ inline std::vector<NetworkCase> registered_network_cases() {
   // BACON reads the coordinates itself: identity only; its finest head, and its coarse one.
   cases.push_back({"bacon", "sine", "identity"});
   cases.push_back({"bacon", "sine", "identity", "coarse"});
+  // ACORN: its own encoder and feature grids, then a decoder (smooth, and with kinks).
+  cases.push_back({"acorn", "tanh", "identity"});
+  cases.push_back({"acorn", "relu", "identity"});
   return cases;
+}
+
+// The streams a case's field does not give, with the reason (empty when it gives all):
+// ACORN's multilinear feature grids have value and gradient streams only (fields/acorn.h).
+inline std::string unsupported_streams(const NetworkCase& c) {
+  if (c.type == "acorn")
+    return "acorn gives the value and tangent streams only: its feature grids are multilinear "
+           "per cell and not continuous across block faces, so operator and Taylor streams are "
+           "refused (fields/acorn.h)";
+  return {};
+}
+inline bool supports(const NetworkCase& c, const StreamLayout& layout) {
+  return unsupported_streams(c).empty() || (layout.operators() == 0 && layout.taylor_dirs() == 0);
 }
 
 // Whether the case's field takes d inputs: an encoding that reads variances takes k means and
 // k variances (fields/integrated_positional.h), so an even number.
 inline bool takes_input_dim(const NetworkCase& c, int d) {
+  if (c.type == "acorn") return d <= 3;  // a quadtree/octree of at most three axes
   return !fields::encoding_type(c.encoding).reads_variances() || d % 2 == 0;
 }
 
@@ -343,6 +364,28 @@ inline fields::FieldOptions small_options(const NetworkCase& c, int input_dim, i
     b.output_scale = c.variant == "coarse" ? 0 : -1;
     o.extension = b;
   }
+  if (c.type == "acorn") {
+    // A grid of 4 vertices an axis, a tree split once more in one corner (two levels).
+    fields::AcornOptions a;
+    a.features = 3;
+    a.grid = 4;
+    a.encoder_hidden = {5};
+    a.encoder_octaves = 2;
+    a.initial_level = 1;
+    a.max_level = 3;
+    a.max_blocks = 64;
+    o.extension = a;
+    // Level-1 blocks but the last (all indices 1), whose 2^d children are at level 2.
+    std::vector<fields::Block> blocks;
+    const int corners = 1 << input_dim;
+    for (int level : {1, 2})
+      for (int i = 0; i < (level == 1 ? corners - 1 : corners); ++i) {
+        fields::Block b{level, {0, 0, 0}};
+        for (int j = 0; j < input_dim; ++j) b.index[j] = (level == 1 ? 0 : 2) + ((i >> j) & 1);
+        blocks.push_back(b);
+      }
+    fields::acorn_tree(o)->set_blocks(std::move(blocks));
+  }
   return o;
 }
 
@@ -350,7 +393,7 @@ inline fields::FieldOptions small_options(const NetworkCase& c, int input_dim, i
 // differences must not straddle.
 inline bool has_kinks(const fields::FieldOptions& o) {
   return (io::to_lower(o.type) != "siren" && io::to_lower(o.activation) == "relu") ||
-         io::to_lower(o.encoding.type) == "cusp" ||
+         io::to_lower(o.encoding.type) == "cusp" || io::to_lower(o.type) == "acorn" ||
          io::to_lower(o.encoding.type) == "hash_grid";
 }
 
@@ -430,6 +473,13 @@ inline StreamSpec directions_spec(int d, std::mt19937_64& rng) {
   s.add_operator(Eigen::MatrixXd::Identity(d + 1, d + 1));
   s.set_taylor(random_matrix(d, 3, rng), 1);
   return s;
+}
+
+// The richest spec a case's field gives: axes_spec with Taylor order 4, or the gradient
+// for a field without operator and Taylor streams.
+inline StreamSpec richest_spec(const NetworkCase& c, int d, std::mt19937_64& rng) {
+  if (!unsupported_streams(c).empty()) return StreamSpec::gradient(d);
+  return axes_spec(d, rng, 4);
 }
 
 inline std::vector<NamedSpec> all_specs(int d, std::mt19937_64& rng) {
