@@ -155,11 +155,10 @@ StepResult bench_step(const BenchOptions& options, const std::string& op_name, l
   return result;
 }
 
-// One table: every operator and batch at options.hidden on the threads set now; the share
-// of the float FMA peak (apps/gemm_rate.h) measured on the same threads just before.
-void run_table(const BenchOptions& options, std::vector<std::string>& lines) {
+// One table: every operator and batch at options.hidden on the threads set now, with its
+// share of `peak`, the float FMA peak (apps/gemm_rate.h) measured on those threads.
+void run_table(const BenchOptions& options, double peak, std::vector<std::string>& lines) {
   const int threads = omp_get_max_threads();
-  const double peak = fma_peak_gflops(threads, 5);
   std::string widths;
   for (int h : options.hidden) widths += (widths.empty() ? "" : "x") + std::to_string(h);
   if (!options.json_only)
@@ -196,14 +195,15 @@ void run_bench(const BenchOptions& options) {
   if (thread_counts.empty()) thread_counts.push_back(options.threads);
   for (int threads : thread_counts) {
     omp_set_num_threads(threads > 0 ? threads : all);
+    const double peak = fma_peak_gflops(omp_get_max_threads(), 5);
     if (options.widths.empty()) {
-      run_table(options, lines);
+      run_table(options, peak, lines);
       continue;
     }
     for (int width : options.widths) {
       BenchOptions one = options;
       one.hidden.assign(options.hidden.size(), width);
-      run_table(one, lines);
+      run_table(one, peak, lines);
     }
   }
   omp_set_num_threads(all);

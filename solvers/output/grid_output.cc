@@ -16,11 +16,6 @@
 namespace nfield::solvers {
 namespace {
 
-struct Frame {
-  io::PointArrays arrays;
-  Eigen::MatrixXd u;
-};
-
 // Pads vectors of 2 components to 3 so ParaView's glyphs and stream tracers take them.
 Eigen::MatrixXd as_vtk_vector(const Eigen::MatrixXd& v) {
   if (v.cols() != 2) return v;
@@ -183,12 +178,7 @@ class FrameArrays {
  public:
   FrameArrays(const Problem& problem, const StreamEvaluator& evaluate, const OutputContext* scales)
       : problem_(problem), evaluate_(evaluate), scales_(scales), terms_(problem.loss_terms()),
-        residual_index_(problem.residual_term()) {
-    const int n = problem.domain().input_dim();
-    autodiff::StreamSpec spec = autodiff::StreamSpec::values(n);
-    spec.tangents = Eigen::MatrixXd::Identity(n, problem.domain().space_dim());
-    gradient_spec_ = spec;
-  }
+        residual_index_(problem.residual_term()), gradient_(space_gradient(problem.domain())) {}
 
   struct At {
     io::PointArrays arrays;
@@ -202,8 +192,7 @@ class FrameArrays {
     At out;
     if (shaped) out.arrays["inside"] = inside.cast<double>().matrix();
     out.u = blank(values_at(evaluate_, domain, x));
-    const autodiff::StreamLayout gradient(gradient_spec_);
-    add_solution_arrays(out.arrays, out.u, gradient, evaluate_(gradient, x), names, inside, shaped, scales_, x);
+    add_solution_arrays(out.arrays, out.u, gradient_, evaluate_(gradient_, x), names, inside, shaped, scales_, x);
     if (residual_index_ >= 0) {
       const LossTerm& term = terms_[static_cast<size_t>(residual_index_)];
       const autodiff::StreamLayout layout(term.spec);
@@ -227,7 +216,13 @@ class FrameArrays {
   const OutputContext* scales_;
   std::vector<LossTerm> terms_;
   int residual_index_;
-  autodiff::StreamSpec gradient_spec_;
+  autodiff::StreamLayout gradient_;  // values and the d spatial tangents
+
+  static autodiff::StreamLayout space_gradient(const Domain& domain) {
+    autodiff::StreamSpec spec = autodiff::StreamSpec::values(domain.input_dim());
+    spec.tangents = Eigen::MatrixXd::Identity(domain.input_dim(), domain.space_dim());
+    return autodiff::StreamLayout(spec);
+  }
 };
 
 GridMetrics write_grid_at(const Problem& problem, const StreamEvaluator& evaluate, const OutputOptions& output,

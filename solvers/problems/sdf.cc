@@ -74,7 +74,7 @@
 //             surface than 5% of its bounding-box diagonal), and sign_seconds.
 //   A field with several scales (field.type: bacon) adds surface_scale<s>.vtp/.ply per scale s
 //   (0 the coarsest) and every metric above with the suffix _scale<s>; the unsuffixed ones are
-//   the field's output scale.
+//   the field's output scale's, computed once.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -263,12 +263,19 @@ class Sdf final : public Problem {
                      std::vector<std::pair<std::string, double>>& metrics) const override {
     const io::Grid grid = io::make_grid(domain_.lower(), domain_.upper(), context.grid);
     const Eigen::MatrixXd x = grid.points(3);
-    write_surface(context.dir, grid, on_grid(x, context.values), "", metrics);
-    // A multiscale field (field.type: bacon): each scale's zero level set too.
+    const Surface output = surface_of(grid, on_grid(x, context.values));
+    write_surface(context.dir, output, "", metrics);
+    // A multiscale field (field.type: bacon): each scale's zero level set too (the output
+    // scale's is the one above).
     if (context.scales > 1 && context.scale_values)
       for (int scale = 0; scale < context.scales; ++scale) {
+        const std::string suffix = "_scale" + std::to_string(scale);
+        if (scale == context.output_scale) {
+          write_surface(context.dir, output, suffix, metrics);
+          continue;
+        }
         const auto values = [&](const Eigen::MatrixXd& points) { return context.scale_values(points, scale); };
-        write_surface(context.dir, grid, on_grid(x, values), "_scale" + std::to_string(scale), metrics);
+        write_surface(context.dir, surface_of(grid, on_grid(x, values)), suffix, metrics);
       }
   }
 
@@ -286,18 +293,20 @@ class Sdf final : public Problem {
     return u;
   }
 
-  // surface{suffix}.vtp and .ply: the zero level set of u on the grid, in the cloud's
-  // coordinates, and its metrics (below), each key ending in `suffix`.
-  void write_surface(const std::filesystem::path& dir, const io::Grid& grid, const Eigen::VectorXd& u,
-                     const std::string& suffix, std::vector<std::pair<std::string, double>>& all) const {
-    io::TriangleMesh surface = io::extract_isosurface(grid, u, 0.0, true);
-    surface.vertices = to_original(surface.vertices);
-    io::write_vtp_mesh(dir / ("surface" + suffix + ".vtp"), surface);
-    io::write_ply(dir / ("surface" + suffix + ".ply"), surface);
+  // The zero level set of u on the grid, in the cloud's coordinates, and its metrics (below).
+  struct Surface {
+    io::TriangleMesh mesh;
+    std::vector<std::pair<std::string, double>> metrics;
+  };
+  Surface surface_of(const io::Grid& grid, const Eigen::VectorXd& u) const {
+    Surface out;
+    out.mesh = io::extract_isosurface(grid, u, 0.0, true);
+    out.mesh.vertices = to_original(out.mesh.vertices);
+    const io::TriangleMesh& surface = out.mesh;
     const io::SurfaceComponents pieces = io::surface_components(surface);
-    std::vector<std::pair<std::string, double>> metrics{
-        {"surface_vertices", static_cast<double>(surface.vertices.rows())},
-        {"surface_triangles", static_cast<double>(surface.triangles.rows())}};
+    std::vector<std::pair<std::string, double>>& metrics = out.metrics;
+    metrics = {{"surface_vertices", static_cast<double>(surface.vertices.rows())},
+               {"surface_triangles", static_cast<double>(surface.triangles.rows())}};
     metrics.emplace_back("surface_components", pieces.count);
     metrics.emplace_back("surface_largest_component_area_share", pieces.largest_area_share);
     if (surface.triangles.rows() > 0) {
@@ -313,7 +322,15 @@ class Sdf final : public Problem {
         metrics.emplace_back("sign_accuracy_band", nan);
       }
     }
-    for (auto& [key, value] : metrics) all.emplace_back(key + suffix, value);
+    return out;
+  }
+
+  // surface{suffix}.vtp and .ply, and the surface's metrics with keys ending in `suffix`.
+  static void write_surface(const std::filesystem::path& dir, const Surface& surface, const std::string& suffix,
+                            std::vector<std::pair<std::string, double>>& all) {
+    io::write_vtp_mesh(dir / ("surface" + suffix + ".vtp"), surface.mesh);
+    io::write_ply(dir / ("surface" + suffix + ".ply"), surface.mesh);
+    for (const auto& [key, value] : surface.metrics) all.emplace_back(key + suffix, value);
   }
 
   // Chamfer distances and normal consistency of the extracted surface against the reference

@@ -19,6 +19,7 @@
 #include "solvers/training/optimizers.h"
 #include "solvers/training/progress_printer.h"
 #include "solvers/training/reptile.h"
+#include "solvers/run/run_metrics.h"
 
 namespace nfield::solvers {
 namespace {
@@ -279,7 +280,7 @@ int meta_train_and_write(RunSetup& setup) {
       std::printf("speedup at least %.1fx (some baselines never matched)\n", metrics["speedup_at_least"].get<double>());
   }
   metrics["nfield_version"] = std::string(version());
-  io::write_atomically(dir / "metrics.json", [&](const fs::path& p) { std::ofstream(p) << metrics.dump(2) << "\n"; });
+  write_metrics_json(dir, metrics);
   std::printf("wrote %s (%ld outer steps, %.1f s)\n", dir.string().c_str(), result.steps, wall);
   return result.finished ? 0 : 130;
 }

@@ -292,9 +292,7 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
   report_unknowns(trainer, dir, metrics);
   if (communicator.size() > 1) metrics["mpi_parameter_spread"] = spread;
   metrics["nfield_version"] = std::string(version());
-  io::write_atomically(dir / "metrics.json", [&](const std::filesystem::path& p) {
-    std::ofstream(p) << metrics.dump(2) << "\n";
-  });
+  write_metrics_json(dir, metrics);
   std::printf("wrote %s (steps %ld, %.1f s", dir.string().c_str(), trainer.step(), wall);
   if (grid.has_error) std::printf(", rel_l2 %.3e, max_abs_err %.3e", grid.rel_l2, grid.max_abs_err);
   std::printf(")\n");
@@ -519,9 +517,7 @@ nlohmann::ordered_json evaluate_checkpoint(const std::filesystem::path& checkpoi
   std::vector<std::pair<std::string, double>> extra;
   setup.problem->write_outputs(context, extra);  // a reference.file's errors, printed as the run prints them
   nlohmann::ordered_json metrics = eval_metrics(setup, grid, extra);
-  io::write_atomically(out_dir / "metrics.json", [&](const std::filesystem::path& p) {
-    std::ofstream(p) << metrics.dump(2) << "\n";
-  });
+  write_metrics_json(out_dir, metrics);
   std::printf("wrote %s", out_dir.string().c_str());
   if (grid.has_error) std::printf(" (rel_l2 %.3e, max_abs_err %.3e)", grid.rel_l2, grid.max_abs_err);
   std::printf("\n");

@@ -3,7 +3,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 
+#include "io/atomic_write.h"
 #include "solvers/geometry/geometry.h"
 
 namespace nfield::solvers {
@@ -140,5 +142,11 @@ template nlohmann::ordered_json run_metrics(const RunSetup&, Trainer<float>&, co
 template nlohmann::ordered_json run_metrics(const RunSetup&, Trainer<double>&, const fields::Field<double>&, bool, double,
                                             const GridMetrics&, const std::vector<std::pair<std::string, double>>&,
                                             long, Communicator&);
+
+void write_metrics_json(const std::filesystem::path& dir, const nlohmann::ordered_json& metrics) {
+  io::write_atomically(dir / "metrics.json", [&](const std::filesystem::path& p) {
+    std::ofstream(p) << metrics.dump(2) << "\n";
+  });
+}
 
 }  // namespace nfield::solvers

@@ -6,6 +6,7 @@
 // MPI volume, and the strategies' and the problem's own figures (`extra`).
 #pragma once
 
+#include <filesystem>
 #include <string>
 #include <utility>
 #include <vector>
@@ -31,5 +32,8 @@ nlohmann::ordered_json run_metrics(const RunSetup& setup, Trainer<Scalar>& train
 // two files compare key by key.
 nlohmann::ordered_json eval_metrics(const RunSetup& setup, const GridMetrics& grid,
                                     const std::vector<std::pair<std::string, double>>& extra);
+
+// dir/metrics.json, indented, written atomically (a reader never sees half a file).
+void write_metrics_json(const std::filesystem::path& dir, const nlohmann::ordered_json& metrics);
 
 }  // namespace nfield::solvers
