@@ -18,6 +18,11 @@ _v_centreline.csv) and
 this solution on each grid, and between the two finest grids (the solution's own error):
 
     scripts/cavity_reference.py [N ...]     # default 128 256
+    PYTHONPATH=build/python scripts/cavity_reference.py 64 128 --run out/lid_driven_cavity/checkpoint.h5 ...
+
+With --run, each checkpoint of configs/lid_driven_cavity.yaml (nfield's Python module loads
+it; u = w + U and v = s + V with the lift of scripts/cavity_lift.py) is compared at Ghia's
+points with Ghia and with the Richardson extrapolation (4 f_2n − f_n)/3 of the two finest grids.
 """
 import pathlib
 import sys
@@ -151,8 +156,41 @@ def centrelines(psi):
     return CubicSpline(s, u), CubicSpline(s, v)
 
 
+def network_centrelines(checkpoint, ghia_u, ghia_v):
+    """u at Ghia's points on x = 0.5 and v on y = 0.5 from a lid_driven_cavity checkpoint."""
+    import nfield
+    from cavity_lift import lift
+    points = np.concatenate([np.column_stack([np.full(len(ghia_u), 0.5), ghia_u[:, 0]]),
+                             np.column_stack([ghia_v[:, 0], np.full(len(ghia_v), 0.5)])])
+    wsp = np.asarray(nfield.load(checkpoint).values(points))
+    d = 4 / (4 - np.pi ** 2)
+    env = dict(A=-d * np.pi ** 2 / 4, C=d * np.pi / 2, D=d, nu=0.01, pi=np.pi, sin=np.sin, cos=np.cos,
+               atan2=np.arctan2, x=points[:, 0], y=points[:, 1])
+    texts = lift()
+    u = wsp[:, 0] + eval(texts["U"].replace("^", "**"), env)
+    v = wsp[:, 1] + eval(texts["V"].replace("^", "**"), env)
+    return u[:len(ghia_u)], v[len(ghia_u):]
+
+
+def compare_runs(checkpoints, found, ghia_u, ghia_v):
+    (_, u1, v1), (_, u2, v2) = found[-2], found[-1]
+    fine_u = (4 * u2(ghia_u[:, 0]) - u1(ghia_u[:, 0])) / 3
+    fine_v = (4 * v2(ghia_v[:, 0]) - v1(ghia_v[:, 0])) / 3
+    print(f"extrapolated FD − Ghia: max |Δu| {np.abs(fine_u - ghia_u[:, 1]).max():.2e}, "
+          f"max |Δv| {np.abs(fine_v - ghia_v[:, 1]).max():.2e}")
+    for checkpoint in checkpoints:
+        u, v = network_centrelines(checkpoint, ghia_u, ghia_v)
+        print(f"{checkpoint}: against Ghia max |Δu| {np.abs(u - ghia_u[:, 1]).max():.2e}, "
+              f"max |Δv| {np.abs(v - ghia_v[:, 1]).max():.2e}; against the extrapolated FD "
+              f"max |Δu| {np.abs(u - fine_u).max():.2e}, max |Δv| {np.abs(v - fine_v).max():.2e}")
+
+
 def main():
-    sizes = [int(a) for a in sys.argv[1:]] or [128, 256]
+    args = sys.argv[1:]
+    checkpoints = args[args.index("--run") + 1:] if "--run" in args else []
+    sizes = [int(a) for a in args[:len(args) - len(checkpoints) - (1 if "--run" in args else 0)]] or [128, 256]
+    if checkpoints and len(sizes) < 2:
+        sys.exit("--run needs two grid sizes to extrapolate from")
     ghia_u, ghia_v = read_ghia()
     found = []
     for n in sizes:
@@ -167,6 +205,8 @@ def main():
         s = np.linspace(0, 1, 1001)
         print(f"n={n1} vs n={n2} on the centrelines: max |Δu| {np.abs(u1(s) - u2(s)).max():.2e}, "
               f"max |Δv| {np.abs(v1(s) - v2(s)).max():.2e}")
+    if checkpoints:
+        compare_runs(checkpoints, found, ghia_u, ghia_v)
 
 
 if __name__ == "__main__":
