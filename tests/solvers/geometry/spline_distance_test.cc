@@ -92,7 +92,7 @@ TEST(SplineDistance, SphereMeshDistanceAndDerivatives) {
   }
 }
 
-// The bunny at configs/poisson_bunny.yaml's 24 cells: the zero level near every vertex, φ
+// The bunny's spline at 24 cells: the zero level near every vertex, φ
 // positive at interior points (also in the ears, a few cells thick).
 TEST(SplineDistance, BunnyZeroLevelNearTheVertices) {
   std::unique_ptr<MeshShape> mesh = read_mesh_shape(kMeshes / "bunny00.ply");
