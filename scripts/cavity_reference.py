@@ -186,11 +186,20 @@ def compare_runs(checkpoints, found, ghia_u, ghia_v):
 
 
 def main():
-    args = sys.argv[1:]
-    checkpoints = args[args.index("--run") + 1:] if "--run" in args else []
-    sizes = [int(a) for a in args[:len(args) - len(checkpoints) - (1 if "--run" in args else 0)]] or [128, 256]
-    if checkpoints and len(sizes) < 2:
-        sys.exit("--run needs two grid sizes to extrapolate from")
+    import argparse
+    parser = argparse.ArgumentParser(description="The lid-driven cavity at Re = 100 by finite differences.")
+    parser.add_argument("sizes", type=int, nargs="*", default=[128, 256], help="grid cells per side (default 128 256)")
+    parser.add_argument("--run", nargs="+", default=[], metavar="CHECKPOINT",
+                        help="checkpoint.h5 files of configs/lid_driven_cavity.yaml runs to compare")
+    args = parser.parse_args()
+    sizes, checkpoints = args.sizes, args.run
+    if any(n < 8 or n % 2 for n in sizes):
+        parser.error(f"grid sizes must be even and at least 8, got {sizes}")
+    if checkpoints and (len(sizes) < 2 or sizes[-1] != 2 * sizes[-2]):
+        parser.error(f"--run extrapolates from the last two grid sizes, which must be n and 2n, got {sizes}")
+    for checkpoint in checkpoints:
+        if not pathlib.Path(checkpoint).is_file():
+            parser.error(f"--run: no such checkpoint file: {checkpoint}")
     ghia_u, ghia_v = read_ghia()
     found = []
     for n in sizes:
