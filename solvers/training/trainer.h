@@ -201,7 +201,6 @@ class Trainer {
     return std::all_of(terms_.begin(), terms_.end(), [](const TermState& t) { return t.residual != nullptr; });
   }
 
-
   void resample();
   // n new points of term k, through its sequence.
   TermPoints sample(size_t k, Eigen::Index n);

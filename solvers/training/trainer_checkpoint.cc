@@ -108,8 +108,8 @@ void Trainer<Scalar>::load_state(const io::H5Reader& file) {
       stage_ends_[k].iterations = static_cast<int>(it[k]);
   }
   watch_.retries = file.has_attribute("trainer", "divergence_retries")
-                            ? static_cast<int>(file.read_attribute<std::int64_t>("trainer", "divergence_retries"))
-                            : 0;
+                       ? static_cast<int>(file.read_attribute<std::int64_t>("trainer", "divergence_retries"))
+                       : 0;
   if (file.has_dataset("trainer/stage_errors")) {
     const Eigen::VectorXd e = file.read_vector<double>("trainer/stage_errors");
     stage_errors_.assign(e.data(), e.data() + e.size());

@@ -19,18 +19,14 @@
 #include "fields/field.h"
 #include "fields/field_io.h"
 #include "tests/testing/scratch.h"
+#include "tests/testing/small_acorn.h"
 #include "tests/testing/squares_loss.h"
 
 namespace nfield::fields {
 namespace {
 
 // The 2-D tree of four level-1 blocks whose block (1, 1) is split into four at level 2.
-std::vector<Block> split_corner() {
-  std::vector<Block> blocks;
-  for (int i = 0; i < 3; ++i) blocks.push_back({1, {i % 2, i / 2, 0}});
-  for (int i = 0; i < 4; ++i) blocks.push_back({2, {2 + i % 2, 2 + i / 2, 0}});
-  return blocks;
-}
+std::vector<Block> split_corner() { return testutil::split_corner(2); }
 
 TEST(AcornTree, TilesAndLocates) {
   BlockTree tree(2, 3, 1);
@@ -139,15 +135,7 @@ FieldOptions small_acorn(int dim, const std::string& activation = "tanh") {
   o.activation = activation;
   o.encoding.lower.assign(static_cast<size_t>(dim), -1.0);
   o.encoding.upper.assign(static_cast<size_t>(dim), 1.0);
-  AcornOptions a;
-  a.features = 3;
-  a.grid = 4;
-  a.encoder_hidden = {5};
-  a.encoder_octaves = 2;
-  a.initial_level = 1;
-  a.max_level = 3;
-  a.max_blocks = 64;
-  o.extension = a;
+  o.extension = testutil::small_acorn_options();
   acorn_tree(o);
   if (dim == 2) acorn_tree(o)->set_blocks(split_corner());
   o.seed = 3;

@@ -31,6 +31,7 @@
 #include "fields/field.h"
 #include "io/text.h"
 #include "tests/testing/reference_field.h"
+#include "tests/testing/small_acorn.h"
 
 namespace nfield::testutil {
 
@@ -365,26 +366,8 @@ inline fields::FieldOptions small_options(const NetworkCase& c, int input_dim, i
     o.extension = b;
   }
   if (c.type == "acorn") {
-    // A grid of 4 vertices an axis, a tree split once more in one corner (two levels).
-    fields::AcornOptions a;
-    a.features = 3;
-    a.grid = 4;
-    a.encoder_hidden = {5};
-    a.encoder_octaves = 2;
-    a.initial_level = 1;
-    a.max_level = 3;
-    a.max_blocks = 64;
-    o.extension = a;
-    // Level-1 blocks but the last (all indices 1), whose 2^d children are at level 2.
-    std::vector<fields::Block> blocks;
-    const int corners = 1 << input_dim;
-    for (int level : {1, 2})
-      for (int i = 0; i < (level == 1 ? corners - 1 : corners); ++i) {
-        fields::Block b{level, {0, 0, 0}};
-        for (int j = 0; j < input_dim; ++j) b.index[j] = (level == 1 ? 0 : 2) + ((i >> j) & 1);
-        blocks.push_back(b);
-      }
-    fields::acorn_tree(o)->set_blocks(std::move(blocks));
+    o.extension = small_acorn_options();
+    fields::acorn_tree(o)->set_blocks(split_corner(input_dim));  // two levels of blocks
   }
   return o;
 }
