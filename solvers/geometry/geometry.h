@@ -40,6 +40,15 @@
 // of both: such a face is not part of ∂Ω of a union, and is of a difference only when the
 // tree says so twice; keep such touching faces apart by a margin if they matter.
 //
+// Quadrature. boundary_quadrature is the deterministic counterpart of sample_boundary, for
+// integrals over parts of ∂Ω (forces on a body): each selected leaf's pieces (primitive.h,
+// pieces) in turn, a midpoint grid in u₁ (2-D) or u₁ × u₂ (3-D) over each, of about n points
+// in all shared by measure, each weighted by its piece's measure × w / the piece's count, and
+// the points that do not lie on the final boundary (or fail `where`) dropped. On a whole
+// circle this is the periodic midpoint rule, exact for trigonometric polynomials of degree
+// below the count (spectral for smooth integrands); on faces and edges it is the midpoint
+// rule, O(h²); where another operand trims a piece the cut is resolved to one cell, O(h).
+//
 // Measures. A single leaf's volume and boundary measure are exact (× s^d, × s^{d−1}). Otherwise
 // they are Monte Carlo estimates: |Ω| ≈ |box| · k/N from N candidates of which k are inside,
 // with standard error |box| √(p(1 − p)/N), p = k/N; the boundary likewise as the proposal
@@ -122,6 +131,13 @@ struct BoundarySample {
   Eigen::VectorXi parts;
 };
 
+// Nodes of a quadrature over part of ∂Ω: ∫ f dS ≈ Σ weights(i) f(points.row(i)).
+struct BoundaryQuadrature {
+  Eigen::MatrixXd points, normals;  // n × d; the outward unit normals
+  Eigen::VectorXd weights;
+  Eigen::VectorXi parts;
+};
+
 // Which part of the boundary: leaves (empty = all) and optionally an expression over x, y, z
 // that must be nonzero (`x < -0.49` is 1 or 0). io::Expression (muparser) rather than
 // io::CompiledExpression: the selection needs comparisons, which the compiled tape lacks, and
@@ -167,6 +183,8 @@ class Geometry {
   // row miss Ω (an empty domain).
   Eigen::MatrixXd sample_interior(Random& rng, Eigen::Index n) const;
   BoundarySample sample_boundary(Random& rng, Eigen::Index n, const Selection& selection = {}) const;
+  // About n nodes (at least one per piece) over the selected part (see Quadrature above).
+  BoundaryQuadrature boundary_quadrature(const Selection& selection, Eigen::Index n) const;
 
   // |Ω| (area in 2-D): exact for one leaf, else estimated from `samples` candidates of a
   // private engine seeded with `seed`.

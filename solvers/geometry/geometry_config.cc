@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: MIT
 #include "solvers/geometry/geometry_config.h"
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <map>
 #include <optional>
@@ -161,7 +163,12 @@ ShapeTree read_node(const io::ConfigNode& n, Context& c) {
   } else {
     std::string name = n.get_or("name", std::string());
     std::unique_ptr<Primitive> p = read_primitive(n, shape, c);
-    if (!name.empty()) {
+    if (n.has("name")) {
+      const bool identifier = !name.empty() && std::isalpha(static_cast<unsigned char>(name[0])) &&
+                              std::all_of(name.begin(), name.end(), [](char ch) {
+                                return std::isalnum(static_cast<unsigned char>(ch)) || ch == '_';
+                              });
+      n.require("name", identifier, "expected a part name of letters, digits and '_', starting with a letter");
       n.require("name", io::to_lower(name) != "boundary", "'boundary' names the whole boundary; pick another name");
       const auto [it, fresh] = c.names.emplace(io::to_lower(name), n);
       n.require("name", fresh, "a part named '" + name + "' exists already");
@@ -212,13 +219,13 @@ Selection read_selection(const io::ConfigNode& node, const Geometry& geometry) {
   } catch (const io::ExpressionError& e) {
     throw node.expression_error("where", e);
   }
-  if (!where.empty()) {  // one point drawn: a `where` that keeps none of the parts is refused here
-    Random rng(1);
-    try {
-      (void)geometry.sample_boundary(rng, 1, *selection);
-    } catch (const std::runtime_error& e) {
-      throw node.error("where", e.what());
-    }
+  // One point drawn: parts that another shape covers entirely, or a `where` that keeps none of
+  // them, are refused here rather than at the first draw of training.
+  Random rng(1);
+  try {
+    (void)geometry.sample_boundary(rng, 1, *selection);
+  } catch (const std::runtime_error& e) {
+    throw node.error(where.empty() ? "on" : "where", e.what());
   }
   return *selection;
 }

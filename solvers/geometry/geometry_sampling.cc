@@ -79,6 +79,56 @@ BoundarySample Geometry::sample_boundary(Random& rng, Eigen::Index n, const Sele
   return s;
 }
 
+BoundaryQuadrature Geometry::boundary_quadrature(const Selection& selection, Eigen::Index n) const {
+  std::vector<int> leaves = selection.parts;
+  if (leaves.empty())
+    for (int i = 0; i < part_count(); ++i) leaves.push_back(i);
+  double total = 0;
+  for (int l : leaves) {
+    const Leaf& leaf = leaves_[static_cast<size_t>(l)];
+    total += leaf.shape->proposal_measure() * std::pow(leaf.map.scale, dim_ - 1);
+  }
+  std::vector<Vec3> points, normals;
+  std::vector<double> weights;
+  std::vector<int> parts;
+  for (int leaf : leaves) {
+    const Leaf& l = leaves_[static_cast<size_t>(leaf)];
+    const double stretch = std::pow(l.map.scale, dim_ - 1);
+    const std::vector<double> pieces = l.shape->pieces();
+    for (std::size_t k = 0; k < pieces.size(); ++k) {
+      const double start = k == 0 ? 0.0 : pieces[k - 1], share = pieces[k] - start;
+      if (!(share > 0)) continue;
+      const auto wanted = std::max<Eigen::Index>(
+          1, static_cast<Eigen::Index>(std::llround(static_cast<double>(n) * share * stretch / total)));
+      const Eigen::Index side =
+          dim_ == 2 ? wanted : std::max<Eigen::Index>(1, static_cast<Eigen::Index>(std::ceil(std::sqrt(wanted))));
+      const Eigen::Index count = dim_ == 2 ? side : side * side;
+      for (Eigen::Index c = 0; c < count; ++c) {
+        double v[4] = {(start + share / 2) / pieces.back(), (static_cast<double>(c % side) + 0.5) / side,
+                       (static_cast<double>(c / side) + 0.5) / side, 0};
+        const SurfacePoint p = l.shape->boundary_point(v);
+        const Vec3 x = l.map.apply(p.point);
+        const int sign = keep(root_, leaf, x);
+        if (sign == 0 || !selected(selection, leaf, x)) continue;
+        points.push_back(x);
+        normals.push_back(sign * (l.map.rotation * p.normal));
+        weights.push_back(share * stretch * p.accept / static_cast<double>(count));
+        parts.push_back(leaf);
+      }
+    }
+  }
+  const auto m = static_cast<Eigen::Index>(points.size());
+  BoundaryQuadrature q{Eigen::MatrixXd(m, dim_), Eigen::MatrixXd(m, dim_), Eigen::VectorXd(m), Eigen::VectorXi(m)};
+  for (Eigen::Index i = 0; i < m; ++i) {
+    const auto j = static_cast<std::size_t>(i);
+    q.points.row(i) = points[j].head(dim_).transpose();
+    q.normals.row(i) = normals[j].head(dim_).transpose();
+    q.weights(i) = weights[j];
+    q.parts(i) = parts[j];
+  }
+  return q;
+}
+
 Measure Geometry::volume(Eigen::Index samples, std::uint64_t seed) const {
   if (root_.op == Combine::kLeaf) {
     const Leaf& l = leaves_.front();

@@ -62,6 +62,7 @@ class MeshShape final : public Primitive {
   Scalar2 distance(const Coords& x) const override;
   SurfacePoint boundary_point(const double* u) const override;
   double proposal_measure() const override { return cumulative_.back(); }
+  std::vector<double> pieces() const override { return cumulative_; }
   const io::TriangleMesh& mesh() const { return mesh_; }
   // ψ from here on: the spline fitted to the exact signed distance on a grid of `cells` along
   // the longest side of the bounding box (spline_distance.h); throws for cells < 4.

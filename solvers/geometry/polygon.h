@@ -41,6 +41,7 @@ class Polygon final : public Primitive {
   Scalar2 distance(const Coords& x) const override;
   SurfacePoint boundary_point(const double* u) const override;
   double proposal_measure() const override { return cumulative_.back(); }
+  std::vector<double> pieces() const override { return cumulative_; }
   const Eigen::MatrixXd& vertices() const { return v_; }
 
  private:

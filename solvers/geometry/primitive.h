@@ -66,6 +66,10 @@ class Primitive {
   virtual double proposal_measure() const = 0;
   // |∂Ω| in closed form, or NaN where there is none (the ellipse's perimeter).
   virtual double boundary_measure() const { return proposal_measure(); }
+  // The cumulative proposal measures of the pieces u₀ picks among (pick_piece; the last is
+  // proposal_measure()); one piece by default. Within a piece, u₁ … u_{d−1} map onto it with
+  // a constant density (up to the weight w), which the boundary quadrature relies on.
+  virtual std::vector<double> pieces() const { return {proposal_measure()}; }
 };
 
 // Picks the piece k of `cumulative` (increasing, last = total) that u ∈ [0, 1) falls in and

@@ -33,6 +33,7 @@ class Box final : public Primitive {
   Scalar2 distance(const Coords& x) const override;
   SurfacePoint boundary_point(const double* u) const override;
   double proposal_measure() const override { return faces_.back(); }
+  std::vector<double> pieces() const override { return faces_; }
 
  private:
   int dim_;
@@ -87,6 +88,7 @@ class Cylinder final : public Primitive {
   Scalar2 distance(const Coords& x) const override;
   SurfacePoint boundary_point(const double* u) const override;
   double proposal_measure() const override { return pieces_.back(); }
+  std::vector<double> pieces() const override { return pieces_; }
 
  private:
   Vec3 center_;
@@ -105,6 +107,7 @@ class Capsule final : public Primitive {
   Scalar2 distance(const Coords& x) const override;
   SurfacePoint boundary_point(const double* u) const override;
   double proposal_measure() const override { return pieces_.back(); }
+  std::vector<double> pieces() const override { return pieces_; }
 
  private:
   int dim_;

@@ -26,7 +26,12 @@
 //
 // A residual item is a string or {expr, weight (≥ 0, default 1), name (default pde, pde_1,
 // …; residual_i for one with `on`), batch (the training.batch entry; default interior,
-// boundary or initial after `on`), on (faces, boundary or initial; default the interior)}.
+// boundary or initial after `on`), on (faces, boundary or initial; default the interior),
+// where (without `on`: interior points only where this expression holds, for more points near
+// a body; with `on` on a geometry: that part of the boundary)}.
+// `functionals` (solvers/problems/pde_functionals.h): boundary integrals and point sums of the
+// solution (a body's drag and lift), reported on the progress line, after training and by
+// `nfield eval`.
 // Its names: the domain's variables (x, y, z, t as it has them), the constants, pi and e,
 // and the derivative symbols of solvers/problems/pde_streams.h (u, u_x, u_xt, u_xxxx,
 // lap(u), bilap(u)); each residual asks the field for exactly the streams of the symbols it
@@ -71,6 +76,7 @@
 #include "solvers/geometry/geometry_config.h"
 #include "solvers/problems/pde_constants.h"
 #include "solvers/problems/pde_data.h"
+#include "solvers/problems/pde_functionals.h"
 #include "solvers/problems/pde_reference.h"
 #include "solvers/problems/pde_residual.h"
 #include "solvers/problems/pde_streams.h"
@@ -103,6 +109,7 @@ struct ResidualSpec {
   Where where = Where::kInterior;
   std::vector<Face> faces;
   std::optional<geometry::Selection> parts;  // instead of faces on a domain with a geometry
+  std::shared_ptr<const io::Expression> region;  // interior points only where it is nonzero
   std::shared_ptr<const io::CompiledExpression> expression;
   std::shared_ptr<const std::vector<std::vector<SymbolTerm>>> symbols;
   std::vector<int> unknown_reads;  // the unknown constant at each slot after the symbols
@@ -110,7 +117,7 @@ struct ResidualSpec {
   std::optional<io::ConfigNode> node;  // for errors found later (hard conditions, duplicate names)
 };
 
-class Pde final : public Problem, public HasFieldBranches {
+class Pde final : public Problem, public HasFieldBranches, public ReportsProgress {
  public:
   explicit Pde(const ProblemContext& context)
       : domain_(Domain::from_config(context.root.child("domain"), context.config_dir)) {
@@ -134,6 +141,7 @@ class Pde final : public Problem, public HasFieldBranches {
     if (root.has("reference")) read_reference(root.child("reference"), context.config_dir);
     fields_.read_truths(reference_, value_expressions(), own_outputs());
     if (root.has("data")) read_data(root.child("data"), context.config_dir);
+    if (root.has("functionals")) read_functionals(root.child("functionals"));
     for (const auto& [name, value] : constants_)
       if (!contains(constants_used_, name))
         throw root.child("constants").error(name, "constant '" + name + "' is never used (by a residual, "
@@ -168,7 +176,11 @@ class Pde final : public Problem, public HasFieldBranches {
       term.weight = r.weight;
       term.spec = r.spec;
       const Domain* domain = &domain_;
-      if (r.where == ResidualSpec::Where::kInterior)
+      if (r.where == ResidualSpec::Where::kInterior && r.region)
+        term.sample = [domain, region = r.region](Random& rng, Eigen::Index n) {
+          return domain->sample_interior_where(rng, n, *region);
+        };
+      else if (r.where == ResidualSpec::Where::kInterior)
         term.sample = [domain](Random& rng, Eigen::Index n) { return domain->sample_interior(rng, n); };
       else if (r.where == ResidualSpec::Where::kInitial)
         term.sample = [domain](Random& rng, Eigen::Index n) { return domain->sample_initial(rng, n); };
@@ -206,7 +218,13 @@ class Pde final : public Problem, public HasFieldBranches {
     if (!reference_.has_points()) return std::nullopt;
     return reference_.errors(compared(context)).all_rel_l2;
   }
+  // `functionals`: on the progress line (at most every 10 s) and after training.
+  std::vector<std::pair<std::string, double>> progress_metrics(const OutputContext& context,
+                                                               const TrainingRate&) const override {
+    return functionals_.values(context, unknowns_);
+  }
   void write_outputs(const OutputContext& context, std::vector<std::pair<std::string, double>>& metrics) const override {
+    functionals_.write(context, unknowns_, metrics);
     if (!reference_.has_points()) return;
     const OutputErrors e = reference_.errors(compared(context));
     const std::vector<std::string> names = compared_names();
@@ -402,6 +420,22 @@ class Pde final : public Problem, public HasFieldBranches {
     reference_ = PdeReference(node, domain_, compared_names(), value_expressions(), config_dir, own_outputs_);
   }
 
+  // `functionals` (solvers/problems/pde_functionals.h): compiled as residuals are, with the
+  // normal's components as variables after the inputs.
+  void read_functionals(const io::ConfigNode& node) {
+    std::vector<std::string> taken = outputs_;
+    for (const auto& [name, value] : constants_) taken.push_back(name);
+    if (unknowns_)
+      for (const UnknownConstant& u : unknowns_->items()) taken.push_back(u.name);
+    const CompileReads compile = [this](const io::ConfigNode& item, const std::string& key,
+                                        const std::vector<std::string>& extra) {
+      ResidualSpec r;
+      compile_residual(item.get<std::string>(key), item, key, r, extra, "functional");
+      return CompiledReads{r.expression, r.symbols, r.unknown_reads, r.spec};
+    };
+    functionals_ = PdeFunctionals(node, domain_, compile, taken);
+  }
+
   // `data`: measurements (solvers/problems/pde_data.h).
   void read_data(const io::ConfigNode& node, const std::filesystem::path& config_dir) {
     data_ = PdeData(node, domain_, own_outputs(), value_expressions(), &reference_, config_dir);
@@ -450,13 +484,19 @@ class Pde final : public Problem, public HasFieldBranches {
   }
 
   // Compiles `text` (at node[key], or node itself) into r's expression, symbols and streams.
+  // `extra` names variables in the slots after the domain's inputs (a functional's normal
+  // components); `what` names the expression in errors.
   void compile_residual(const std::string& text, const io::ConfigNode& node, const std::optional<std::string>& key,
-                        ResidualSpec& r) {
+                        ResidualSpec& r, const std::vector<std::string>& extra = {},
+                        const std::string& what = "residual") {
     // Candidate symbols get slots d, d + 1, … as they are resolved; those the compiled
     // expression reads (an alias may have replaced some) are then renumbered from d.
     std::vector<DerivativeSymbol> candidates;
     io::ExpressionScope s = scope(true);
-    const int d = domain_.input_dim();
+    for (std::size_t k = 0; k < extra.size(); ++k)
+      s.slots.emplace_back(extra[k], domain_.input_dim() + static_cast<int>(k));
+    if (!extra.empty()) s.valid_names += "; " + io::join(extra);
+    const int d = domain_.input_dim() + static_cast<int>(extra.size());
     // Unknown constants resolve to slots d + kUnknownSlots + i until renumbered.
     constexpr int kUnknownSlots = 1 << 16;
     const auto slot_of = [&candidates, d](const DerivativeSymbol& symbol) {
@@ -502,12 +542,12 @@ class Pde final : public Problem, public HasFieldBranches {
       return key ? node.error(*key, message) : node.error(message);
     };
     if (symbols.empty())
-      throw error("the residual '" + text + "' reads no output (outputs: " + io::join(outputs_) +
+      throw error("the " + what + " '" + text + "' reads no output (outputs: " + io::join(outputs_) +
                   "); write it with u, u_x, lap(u), …");
     if (static_cast<int>(symbols.size()) > kMaxExpressionReads)
-      throw error("the residual reads " + std::to_string(symbols.size()) + " derivative symbols; at most " +
+      throw error("the " + what + " reads " + std::to_string(symbols.size()) + " derivative symbols; at most " +
                   std::to_string(kMaxExpressionReads));
-    StreamPlan plan = plan_streams(symbols, d, domain_.space_dim());
+    StreamPlan plan = plan_streams(symbols, domain_.input_dim(), domain_.space_dim());
     r.spec = std::move(plan.spec);
     r.symbols = std::make_shared<const std::vector<std::vector<SymbolTerm>>>(std::move(plan.symbols));
   }
@@ -527,10 +567,14 @@ class Pde final : public Problem, public HasFieldBranches {
     return aliases;
   }
 
-  // `on`: faces, boundary or initial; absent: the interior.
-  void read_where(const io::ConfigNode& item, ResidualSpec& r) const {
+  // `on`: faces, boundary or initial; absent: the interior, or with `where` the region of it
+  // where that expression is nonzero (more points near a body: its own batch and weight).
+  void read_where(const io::ConfigNode& item, ResidualSpec& r) {
     r.batch_key = "interior";
-    if (!item.has("on")) return;
+    if (!item.has("on")) {
+      if (item.has("where")) read_region(item, r);
+      return;
+    }
     if (!item.has_list("on") && io::to_lower(item.get<std::string>("on")) == "initial") {
       if (!domain_.has_time()) throw item.error("on", "'initial' needs a domain with a time interval");
       r.where = ResidualSpec::Where::kInitial;
@@ -541,6 +585,15 @@ class Pde final : public Problem, public HasFieldBranches {
     else r.faces = condition_faces(item, domain_);
     r.where = ResidualSpec::Where::kFaces;
     r.batch_key = "boundary";
+  }
+
+  void read_region(const io::ConfigNode& item, ResidualSpec& r) {
+    r.region = std::make_shared<const io::Expression>(
+        item.get_expression("where", domain_.expression_variables(), constants_));
+    note_constants(std::optional<io::Expression>(*r.region));
+    Random probe(1);
+    const Eigen::VectorXd hit = r.region->evaluate(domain_.sample_interior(probe, 1 << 14));
+    item.require("where", (hit.array() != 0).any(), "no point of 2^14 drawn in the domain lies in this region");
   }
 
   // Distinct term names; no Taylor streams under hard conditions.
@@ -575,6 +628,7 @@ class Pde final : public Problem, public HasFieldBranches {
   std::vector<UnknownConstant> unknown_items_;
   std::shared_ptr<UnknownConstants> unknowns_;  // null: none
   PdeData data_;
+  PdeFunctionals functionals_;
 };
 
 }  // namespace

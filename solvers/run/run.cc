@@ -349,7 +349,10 @@ void check_stage_sizes(const RunSetup& s) {
             return *grouped;
           }};
   for (std::size_t i = 0; i < s.training.stages.size(); ++i) {
-    const std::string refusal = s.training.stages[i].settings->refuse(size);
+    // A stage with batch_scale k draws k times the points (an upper bound: RAR's set is not scaled).
+    ProblemSize stage_size = size;
+    stage_size.residual_rows = [&size, k = s.training.stages[i].batch_scale] { return k * size.residual_rows(); };
+    const std::string refusal = s.training.stages[i].settings->refuse(stage_size);
     if (!refusal.empty())
       throw s.root.child("training").child("stages").at(i).error("optimizer", refusal);
   }

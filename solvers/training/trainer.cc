@@ -123,9 +123,11 @@ void Trainer<Scalar>::set_points(size_t k) {
 template <typename Scalar>
 void Trainer<Scalar>::resample() {
   if (callbacks_ && callbacks_->before_draw) callbacks_->before_draw(global_step_, rng_);
+  const long scale = stage_ < static_cast<int>(options_.stages.size()) ? options_.stages[stage_].batch_scale : 1;
   for (size_t k = 0; k < terms_.size(); ++k) {
     // A term with no batch key draws its own set (measurements: all of them, every step).
-    terms_[k].points = sample(k, terms_[k].term.batch_key.empty() ? 0 : options_.batch.at(terms_[k].term.batch_key));
+    terms_[k].points =
+        sample(k, terms_[k].term.batch_key.empty() ? 0 : scale * options_.batch.at(terms_[k].term.batch_key));
     for (const auto& s : strategies_) s->points_drawn(k, terms_[k].points);
     set_points(k);
   }

@@ -59,6 +59,7 @@ TrainingOptions TrainingOptions::from_config(const io::ConfigNode& node) {
       StageOptions stage;
       stage.optimizer = s.get_choice("optimizer", optimizer_names());
       stage.steps = s.get_in_range("steps", 0, 1 << 30);
+      if (s.has("batch_scale")) stage.batch_scale = s.get_in_range("batch_scale", 1, 1024);
       std::unique_ptr<Optimizer> optimizer = make_optimizer(stage.optimizer);
       optimizer->read(s);
       stage.settings = std::move(optimizer);
@@ -85,6 +86,7 @@ YAML::Node TrainingOptions::to_yaml() const {
     YAML::Node y;
     y["optimizer"] = s.optimizer;
     y["steps"] = s.steps;
+    if (s.batch_scale != 1) y["batch_scale"] = s.batch_scale;
     s.settings->write(y);
     n["stages"].push_back(y);
   }

@@ -55,6 +55,9 @@ struct StageOptions {
 
   std::string optimizer = "adam";  // a name of the optimizer registry (solvers/training/optimizer.h)
   int steps = 1000;
+  // Every loss term draws this many times its training.batch in this stage (a last
+  // Levenberg–Marquardt polish on more points than the earlier stages could afford).
+  int batch_scale = 1;
   // The optimizer with this stage's own keys read; each run of the stage works on a clone.
   std::shared_ptr<const Optimizer> settings;
 

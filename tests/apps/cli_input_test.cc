@@ -109,7 +109,7 @@ std::vector<BadConfig> bad_configs() {
       {"UnknownTopLevelKey", base + "solver: fast\n", "|solver", "solver",
        {"unknown key 'solver' (valid keys: ", "problem", "domain", "training", "output"}},
       {"UnknownStageKey", edit("lr: 1.0e-3}", "lrr: 1.0e-3}"), "|lrr", "training.stages[0].lrr",
-       {"unknown key 'lrr' (valid keys: optimizer, steps, lr, schedule, lr_final, seconds)"}},
+       {"unknown key 'lrr' (valid keys: optimizer, steps, batch_scale, lr, schedule, lr_final, seconds)"}},
       {"UnknownFieldKey", edit("  hidden: [8, 8]", "  hiden: [8, 8]"), "|hiden", "field.hiden",
        {"unknown key 'hiden'", "hidden"}},
       {"UnknownConditionKey", edit("value: \"0\"}", "value: \"0\", wieght: 2}"), "|wieght",

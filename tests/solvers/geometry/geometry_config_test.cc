@@ -145,7 +145,16 @@ INSTANTIATE_TEST_SUITE_P(
                 "geo.yaml:4:5: geometry.shapes:", "at least two shapes"},
         Refusal{"UnknownShape", "geometry: {shape: torus}\n", "geo.yaml:1:", "expected one of box, disk"},
         Refusal{"UnknownKey", "geometry: {shape: disk, center: [0, 0], radius: 1, radus: 2}\n", "geo.yaml:1:",
-                "unknown key 'radus'"}),
+                "unknown key 'radus'"},
+        Refusal{"EmptyName", "geometry: {shape: disk, name: \"\", center: [0, 0], radius: 1}\n",
+                "geo.yaml:1:31: geometry.name:", "expected a part name of letters, digits and '_'"},
+        Refusal{"NameNotAnIdentifier", "geometry: {shape: disk, name: \"sin(x\", center: [0, 0], radius: 1}\n",
+                "geo.yaml:1:31: geometry.name:", "expected a part name of letters, digits and '_'"},
+        // The hole lies inside the larger disk of the union: none of its boundary survives.
+        Refusal{"CoveredPart",
+                "geometry:\n  shape: union\n  shapes:\n    - {shape: disk, name: big, center: [0, 0], radius: 2}\n"
+                "    - {shape: disk, name: hole, center: [0, 0], radius: 1}\n",
+                "c.yaml:1:5: on:", "the selected boundary is empty"}),
     [](const ::testing::TestParamInfo<Refusal>& info) { return info.param.name; });
 
 TEST(GeometryConfig, BadWhereExpressionIsLocated) {

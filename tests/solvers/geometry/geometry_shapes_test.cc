@@ -453,6 +453,69 @@ TEST(GeometryCombined, BoxWithABoreIn3D) {
   }
 }
 
+// The boundary quadrature: Σ w = |∂Ω| and, by the divergence theorem, Σ w (x·n)/d = |Ω|.
+// x·n is linear on faces and edges and a trigonometric polynomial of degree 1 on circles and
+// spheres (in the azimuth; the sphere's z = 1 − 2u is linear), so the midpoint rules are exact
+// to rounding there; on the 2-D capsule's half circles (not periodic) the rule is O(h²); the
+// ellipse(oid)'s weighted rule is smooth, spectral in 2-D.
+struct QuadratureSums {
+  double measure = 0, divergence = 0;
+};
+QuadratureSums quadrature_sums(const Geometry& g, const Selection& s, Eigen::Index n) {
+  const BoundaryQuadrature q = g.boundary_quadrature(s, n);
+  QuadratureSums sums;
+  for (Eigen::Index i = 0; i < q.weights.size(); ++i) {
+    sums.measure += q.weights(i);
+    sums.divergence += q.weights(i) * q.points.row(i).dot(q.normals.row(i)) / g.dim();
+  }
+  return sums;
+}
+
+TEST(GeometryQuadrature, EveryPrimitiveIntegratesItsMeasureAndVolume) {
+  for (const Case& c : cases()) {
+    // Placed, so the map's scale and rotation enter the weights and normals.
+    Similarity map;
+    map.scale = 1.3;
+    map.rotation = c.make()->dim() == 2 ? Similarity::rotation_2d(25) : Similarity::rotation_3d(Vec3(10, 20, 30));
+    map.translation = Vec3(0.3, -0.2, c.make()->dim() == 3 ? 0.1 : 0);
+    Geometry g(leaf(c.make()).place(map));
+    const double v = c.volume * std::pow(1.3, g.dim());
+    const QuadratureSums sums = quadrature_sums(g, {}, 1 << 14);
+    const bool smooth_only = c.name == "ellipse" || c.name == "ellipsoid";
+    const double tolerance = c.name == "ellipsoid" ? 1e-4 : c.name == "capsule2" ? 1e-7 : 1e-10;
+    EXPECT_NEAR(sums.divergence, v, tolerance * v) << c.name;
+    if (!smooth_only) EXPECT_NEAR(sums.measure, c.boundary * std::pow(1.3, g.dim() - 1), 1e-10 * c.boundary) << c.name;
+  }
+}
+
+TEST(GeometryQuadrature, PartsOfACombinedDomain) {
+  const Geometry g = plate();
+  const QuadratureSums all = quadrature_sums(g, {}, 1 << 14);
+  EXPECT_NEAR(all.measure, 8 + 4 * 2 * kPi * 0.2, 1e-10);
+  EXPECT_NEAR(all.divergence, 4 - 4 * kPi * 0.04, 1e-10);
+  // One hole: its length, and its normals (into the hole) sum to 0 round the closed curve.
+  const BoundaryQuadrature hole = g.boundary_quadrature(g.select({"hole3"}), 1000);
+  ASSERT_GT(hole.weights.size(), 900);
+  EXPECT_NEAR(hole.weights.sum(), 0.4 * kPi, 1e-12);
+  EXPECT_NEAR((hole.normals.transpose() * hole.weights).norm(), 0, 1e-12);
+  EXPECT_TRUE((hole.parts.array() == 3).all());
+  // A trimmed boundary (the union of two disks): the cut is resolved to one cell, so the
+  // error is O(1/n) and falls as n grows.
+  Geometry u(ShapeTree::combine(Combine::kUnion, list(leaf(std::make_unique<Ball>(2, Vec3(-0.5, 0, 0), 1.0)),
+                                                      leaf(std::make_unique<Ball>(2, Vec3(0.5, 0, 0), 1.0)))));
+  const double area = 2 * kPi - (2 * kPi / 3 - std::sqrt(3.0) / 2);
+  // Bound: four cuts, each off by at most one cell (4π/n of arc) times the largest integrand,
+  // 1 + |x·n|/2 ≤ 1.75.
+  double previous = 1;
+  for (Eigen::Index n : {1 << 10, 1 << 13, 1 << 16}) {
+    const QuadratureSums sums = quadrature_sums(u, {}, n);
+    const double error = std::abs(sums.divergence - area) + std::abs(sums.measure - 8 * kPi / 3);
+    EXPECT_LT(error, 4 * (4 * kPi / static_cast<double>(n)) * 1.75) << n;
+    EXPECT_LT(error, previous / 4) << n;  // n grows 8×
+    previous = error;
+  }
+}
+
 TEST(GeometryParts, SelectionsGetOnlyTheirOwnPoints) {
   const Geometry g = plate();
   Random rng(43);

@@ -21,62 +21,17 @@
 #include "solvers/run/run.h"
 #include "solvers/training/trainer.h"
 #include "tests/testing/config_errors.h"
+#include "tests/testing/exponential_streams.h"
 #include "tests/testing/scratch.h"
 
 namespace nfield::solvers {
 namespace {
 
+using testutil::Exponentials;
+using testutil::exponential_streams;
+using testutil::random_exponentials;
+
 using Kind = DerivativeSymbol::Kind;
-
-// u_c(x) = Σ_m b_mc exp(c_m · x): every derivative is closed-form, along any direction.
-struct Exponentials {
-  std::vector<Eigen::VectorXd> rates;  // c_m
-  Eigen::MatrixXd weights;             // b: terms × channels
-
-  // Σ_m b_mc exp(c_m·x) f(c_m).
-  template <class F>
-  double sum(int channel, const Eigen::VectorXd& x, F f) const {
-    double s = 0;
-    for (std::size_t m = 0; m < rates.size(); ++m)
-      s += weights(static_cast<Eigen::Index>(m), channel) * std::exp(rates[m].dot(x)) * f(rates[m]);
-    return s;
-  }
-};
-
-Exponentials random_exponentials(int input_dim, int channels, std::mt19937& rng) {
-  std::uniform_real_distribution<double> u(-1, 1);
-  Exponentials e;
-  for (int m = 0; m < 3; ++m) e.rates.push_back(Eigen::VectorXd::NullaryExpr(input_dim, [&] { return u(rng); }));
-  e.weights = Eigen::MatrixXd::NullaryExpr(3, channels, [&] { return u(rng); });
-  return e;
-}
-
-// The streams a field equal to `f` gives for `layout` (autodiff/streams.h): values,
-// tangents c·vᵢ, operators Σ Cᵢⱼ (c·vᵢ)(c·vⱼ), Taylor coefficients (c·w)ᵏ/k!, times the terms.
-autodiff::Streams<double> exponential_streams(const autodiff::StreamLayout& layout, const Exponentials& f,
-                                              const Eigen::MatrixXd& x, int channels) {
-  const autodiff::StreamSpec& spec = layout.spec();
-  autodiff::Streams<double> s;
-  s.resize(x.rows(), layout.count(), channels);
-  for (Eigen::Index n = 0; n < x.rows(); ++n)
-    for (int c = 0; c < channels; ++c) {
-      const Eigen::VectorXd p = x.row(n).transpose();
-      s.stream(0)(n, c) = f.sum(c, p, [](const Eigen::VectorXd&) { return 1.0; });
-      for (int i = 0; i < layout.tangents(); ++i)
-        s.stream(layout.tangent(i))(n, c) = f.sum(c, p, [&](const Eigen::VectorXd& r) { return r.dot(spec.tangents.col(i)); });
-      for (int q = 0; q < layout.operators(); ++q)
-        s.stream(layout.op(q))(n, c) = f.sum(c, p, [&](const Eigen::VectorXd& r) {
-          const Eigen::VectorXd g = spec.tangents.transpose() * r;
-          return g.dot(spec.operators[static_cast<std::size_t>(q)] * g);
-        });
-      for (int d = 0; d < layout.taylor_dirs(); ++d)
-        for (int k = 1; k <= layout.taylor_order(); ++k)
-          s.stream(layout.taylor(d, k))(n, c) = f.sum(c, p, [&](const Eigen::VectorXd& r) {
-            return std::pow(r.dot(spec.taylor_directions.col(d)), k) / std::tgamma(k + 1.0);
-          });
-    }
-  return s;
-}
 
 // The symbol's closed form for the exponentials.
 double exact_symbol(const DerivativeSymbol& s, const Exponentials& f, const Eigen::VectorXd& x, int space_dim) {
@@ -544,6 +499,35 @@ equation:
     - "u_t - nu*u_xx + v"
     - "v_t + u_xq"
 )yaml";
+
+// An interior residual with `where` draws its points in that region only, and a region no
+// point of the domain lies in is refused at its key.
+TEST(Pde, InteriorResidualInARegion) {
+  const char* text = R"yaml(problem: pde
+domain: {lower: [0, 0], upper: [1, 1]}
+equation:
+  residuals:
+    - "lap(u) - 1"
+    - {expr: "lap(u) - 1", where: "(x - 0.3)^2 + (y - 0.6)^2 < 0.01", batch: near, name: near}
+training: {batch: {interior: 100, near: 50}}
+)yaml";
+  const RunSetup setup = load_run(write_config("region", text), {});
+  for (const LossTerm& term : setup.problem->loss_terms()) {
+    if (term.name != "near") continue;
+    EXPECT_EQ(term.batch_key, "near");
+    Random rng(3);
+    const Eigen::MatrixXd x = term.sample(rng, 500);
+    ASSERT_EQ(x.rows(), 500);
+    for (Eigen::Index r = 0; r < x.rows(); ++r) ASSERT_LT(std::hypot(x(r, 0) - 0.3, x(r, 1) - 0.6), 0.1);
+    // Uniform over the disk: the mean radius² is r²/2 (4 standard errors of 500 draws).
+    const double mean_r2 = ((x.col(0).array() - 0.3).square() + (x.col(1).array() - 0.6).square()).mean();
+    EXPECT_NEAR(mean_r2, 0.005, 4 * 0.01 / std::sqrt(12.0 * 500));
+  }
+  std::string empty = text;
+  empty.replace(empty.find("< 0.01"), 6, "< 0");
+  testutil::expect_located_error(write_config("empty_region", empty),
+                                 {6, 35, "equation.residuals[1].where", "no point of 2^14 drawn in the domain lies in this region"});
+}
 
 TEST(Pde, ConfigErrorsAreLocated) {
   using testutil::expect_located_error;

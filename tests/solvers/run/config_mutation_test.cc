@@ -101,6 +101,8 @@ bool in_key_set(const std::set<std::string>& keys, const Path& path) {
 }
 // Free text, where any string is a valid value.
 const std::set<std::string> kFreeText = {"dir"};
+// Mappings whose keys are the user's own names, read by nothing else (a functional's name).
+const std::set<std::string> kFreeNames = {"functionals"};
 
 bool is_number(const std::string& text) {
   try {
@@ -230,7 +232,7 @@ void mutate_values(const YAML::Node& root, const YAML::Node& node, const Path& p
         set_step(parent, path.back(), rebuilt);
       }
       out.push_back({where + (where.empty() ? "" : ".") + name + " renamed " + name + "_typo",
-                     io::to_yaml(renamed), true});
+                     io::to_yaml(renamed), path.empty() || !kFreeNames.count(last_key(path))});
     }
     for (const auto& entry : node)
       mutate_values(root, entry.second, [&] {

@@ -182,6 +182,40 @@ TEST(LevenbergMarquardt, ResampleEveryDrawsNewPointsAndKeepsTheStepCount) {
   }
 }
 
+// `batch_scale: k` on a stage: its terms draw k times their batch (the earlier stage's do not),
+// the resolved config keeps the key, and the load-time size check counts the larger sets.
+TEST(LevenbergMarquardt, BatchScaleDrawsMorePointsInItsStage) {
+  RunSetup setup = load_run(write_config(poisson_config(kSmallMlp, "{interior: 60, boundary: 20}",
+                                                        "    - {optimizer: adam, steps: 2}\n"
+                                                        "    - {optimizer: lm, steps: 2, batch_scale: 3}\n")),
+                            {});
+  EXPECT_EQ(setup.training.to_yaml()["stages"][1]["batch_scale"].as<int>(), 3);
+  EXPECT_FALSE(setup.training.to_yaml()["stages"][0]["batch_scale"]);
+  fields::Field<double> field(setup.field);
+  Trainer<double> trainer(*setup.problem, field, setup.training);
+  std::vector<Eigen::Index> adam_points;
+  typename Trainer<double>::Callbacks callbacks;
+  callbacks.progress = [&](const Progress& p) {
+    if (p.step <= 2) adam_points.push_back(trainer.points(0).rows() + trainer.points(1).rows());
+  };
+  ASSERT_TRUE(trainer.run(callbacks));
+  EXPECT_EQ(adam_points, (std::vector<Eigen::Index>{80, 80}));
+  EXPECT_EQ(trainer.points(0).rows() + trainer.points(1).rows(), 240);
+
+  const std::string field_text = "{type: siren, hidden: [256, 256, 256]}";
+  const std::string stages = "    - {optimizer: lm, steps: 1, backend: ceres, batch_scale: 2}\n";
+  EXPECT_NO_THROW(load_run(write_config(poisson_config(field_text, "{interior: 9000, boundary: 40}",
+                                                       "    - {optimizer: lm, steps: 1, backend: ceres}\n")),
+                           {}));
+  try {
+    load_run(write_config(poisson_config(field_text, "{interior: 9000, boundary: 40}", stages)), {});
+    ADD_FAILURE() << "no error at load time";
+  } catch (const io::ConfigError& e) {
+    EXPECT_EQ(e.key_path(), "training.stages[0].optimizer") << e.what();
+    EXPECT_NE(std::string(e.what()).find("18080 residuals"), std::string::npos) << e.what();
+  }
+}
+
 // Fewer residuals than parameters: Ceres' LM on its QR solver fits them to rounding, its trust
 // region then collapses and Ceres ends the stage early. (On the normal equations, Ceres' and
 // the own, the squared condition number stops the fit near 1e-8; the own method's collapse
