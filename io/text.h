@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // Names and numbers in messages and lookups: case folding (registry entries, config choices,
-// file extensions, column names), lists of names, numbers in their shortest form.
+// file extensions, column names), names a config may give (outputs, constants, parts), lists
+// of names, numbers in their shortest form.
 #pragma once
 
 #include <sstream>
@@ -17,6 +18,15 @@ inline std::string to_lower(std::string_view text) {
   for (char& c : out)
     if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
   return out;
+}
+
+// A name a config gives: an ASCII letter, then letters and digits (and '_' with `underscore`).
+inline bool is_name(std::string_view name, bool underscore) {
+  const auto letter = [](char c) { return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z'); };
+  if (name.empty() || !letter(name[0])) return false;
+  for (char c : name)
+    if (!letter(c) && !(c >= '0' && c <= '9') && !(underscore && c == '_')) return false;
+  return true;
 }
 
 // "a, b, c": the names an error message lists.

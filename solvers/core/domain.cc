@@ -222,6 +222,16 @@ Eigen::MatrixXd Domain::sample_interior_where(Random& rng, Eigen::Index n, const
   return out;
 }
 
+std::shared_ptr<const io::Expression> read_interior_region(const io::ConfigNode& node, std::string_view key,
+                                                           const Domain& domain, io::ExpressionConstants constants) {
+  auto region = std::make_shared<const io::Expression>(
+      node.get_expression(key, domain.expression_variables(), std::move(constants)));
+  Random probe(1);
+  const Eigen::VectorXd hit = region->evaluate(domain.sample_interior(probe, 1 << 14));
+  node.require(key, (hit.array() != 0).any(), "no point of 2^14 drawn in the domain lies in this region");
+  return region;
+}
+
 Eigen::MatrixXd Domain::sample_face(const Face& face, Random& rng, Eigen::Index n) const {
   require_box("sample_face");
   Eigen::MatrixXd x = sample_interior(rng, n);

@@ -163,4 +163,11 @@ class Domain {
   std::optional<std::pair<double, double>> time_;
 };
 
+// A region of the interior for more residual points (poisson's `focus`, pde's `where`):
+// node[key], an expression over domain.expression_variables() and `constants`, nonzero in the
+// region. A ConfigError at the key when no point of 2¹⁴ drawn in the domain lies in it.
+std::shared_ptr<const io::Expression> read_interior_region(const io::ConfigNode& node, std::string_view key,
+                                                           const Domain& domain,
+                                                           io::ExpressionConstants constants = {});
+
 }  // namespace nfield::solvers

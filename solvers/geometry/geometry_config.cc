@@ -1,8 +1,6 @@
 // SPDX-License-Identifier: MIT
 #include "solvers/geometry/geometry_config.h"
 
-#include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <map>
 #include <optional>
@@ -164,11 +162,7 @@ ShapeTree read_node(const io::ConfigNode& n, Context& c) {
     std::string name = n.get_or("name", std::string());
     std::unique_ptr<Primitive> p = read_primitive(n, shape, c);
     if (n.has("name")) {
-      const bool identifier = !name.empty() && std::isalpha(static_cast<unsigned char>(name[0])) &&
-                              std::all_of(name.begin(), name.end(), [](char ch) {
-                                return std::isalnum(static_cast<unsigned char>(ch)) || ch == '_';
-                              });
-      n.require("name", identifier, "expected a part name of letters, digits and '_', starting with a letter");
+      n.require("name", io::is_name(name, true), "expected a part name of letters, digits and '_', starting with a letter");
       n.require("name", io::to_lower(name) != "boundary", "'boundary' names the whole boundary; pick another name");
       const auto [it, fresh] = c.names.emplace(io::to_lower(name), n);
       n.require("name", fresh, "a part named '" + name + "' exists already");

@@ -60,7 +60,6 @@
 // Limits: a residual reads at most 32 symbols; hard conditions (enforce: hard) take no
 // residual of order above 2.
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -89,13 +88,6 @@ namespace {
 const std::vector<std::string> kReservedNames = {
     "x", "y", "z", "t", "pi", "e", "lap", "bilap", "sin", "cos", "tan", "exp", "log", "sqrt",
     "abs", "tanh", "sinh", "cosh", "atan", "atan2", "min", "max", "pow"};
-
-bool is_name(const std::string& name, bool underscore) {
-  if (name.empty() || !std::isalpha(static_cast<unsigned char>(name[0]))) return false;
-  return std::all_of(name.begin(), name.end(), [&](char c) {
-    return std::isalnum(static_cast<unsigned char>(c)) || (underscore && c == '_');
-  });
-}
 
 bool contains(const std::vector<std::string>& names, const std::string& name) {
   return std::find(names.begin(), names.end(), name) != names.end();
@@ -221,10 +213,10 @@ class Pde final : public Problem, public HasFieldBranches, public ReportsProgres
   // `functionals`: on the progress line (at most every 10 s) and after training.
   std::vector<std::pair<std::string, double>> progress_metrics(const OutputContext& context,
                                                                const TrainingRate&) const override {
-    return functionals_.values(context, unknowns_);
+    return functionals_.values(context);
   }
   void write_outputs(const OutputContext& context, std::vector<std::pair<std::string, double>>& metrics) const override {
-    functionals_.write(context, unknowns_, metrics);
+    functionals_.write(context, metrics);
     if (!reference_.has_points()) return;
     const OutputErrors e = reference_.errors(compared(context));
     const std::vector<std::string> names = compared_names();
@@ -251,7 +243,7 @@ class Pde final : public Problem, public HasFieldBranches, public ReportsProgres
     outputs_ = root.get_or<std::vector<std::string>>("outputs", {"u"});
     root.require("outputs", !outputs_.empty(), "expected a non-empty list of output names");
     for (const std::string& name : outputs_) {
-      root.require("outputs", is_name(name, false),
+      root.require("outputs", io::is_name(name, false),
                    "output name '" + name + "' must be letters and digits, starting with a letter");
       root.require("outputs", !contains(kReservedNames, name),
                    "output name '" + name + "' is taken (reserved: " + io::join(kReservedNames) + ")");
@@ -272,7 +264,7 @@ class Pde final : public Problem, public HasFieldBranches, public ReportsProgres
     node.require(node.is_map(), "expected a mapping of names to numbers or constant expressions");
     for (const std::string& name : node.keys()) {
       const std::string problem =
-          !is_name(name, true)                         ? "must be letters, digits and '_', starting with a letter"
+          !io::is_name(name, true)                         ? "must be letters, digits and '_', starting with a letter"
           : contains(kReservedNames, name)             ? "is taken (reserved: " + io::join(kReservedNames) + ")"
           : contains(outputs_, name.substr(0, name.find('_'))) ? "reads as an output or its derivative"
                                                                 : "";
@@ -328,7 +320,7 @@ class Pde final : public Problem, public HasFieldBranches, public ReportsProgres
       const bool constant =
           std::any_of(constants_.begin(), constants_.end(), [&](const auto& c) { return c.first == name; });
       node.require(name,
-                   is_name(name, false) && !contains(kReservedNames, name) && !contains(outputs_, name) && !constant,
+                   io::is_name(name, false) && !contains(kReservedNames, name) && !contains(outputs_, name) && !constant,
                    "expected a new name of letters and digits (not an output, constant, variable or function)");
       try {
         derived_.emplace_back(node.get<std::string>(name), s);
@@ -433,7 +425,7 @@ class Pde final : public Problem, public HasFieldBranches, public ReportsProgres
       compile_residual(item.get<std::string>(key), item, key, r, extra, "functional");
       return CompiledReads{r.expression, r.symbols, r.unknown_reads, r.spec};
     };
-    functionals_ = PdeFunctionals(node, domain_, compile, taken);
+    functionals_ = PdeFunctionals(node, domain_, compile, taken, unknowns_);
   }
 
   // `data`: measurements (solvers/problems/pde_data.h).
@@ -470,9 +462,9 @@ class Pde final : public Problem, public HasFieldBranches, public ReportsProgres
       item.require("weight", std::isfinite(r.weight) && r.weight >= 0, "expected a weight >= 0");
       read_where(item, r);
       r.name = item.get_or("name", (r.where == ResidualSpec::Where::kInterior ? "pde" : "residual") + suffix);
-      item.require("name", is_name(r.name, true), "expected a name of letters, digits and '_'");
+      item.require("name", io::is_name(r.name, true), "expected a name of letters, digits and '_'");
       r.batch_key = item.get_or("batch", r.batch_key);
-      item.require("batch", is_name(r.batch_key, true), "expected a training.batch key (letters, digits, '_')");
+      item.require("batch", io::is_name(r.batch_key, true), "expected a training.batch key (letters, digits, '_')");
     } else {
       text = item.as<std::string>();
       r.name = "pde" + suffix;
@@ -572,7 +564,10 @@ class Pde final : public Problem, public HasFieldBranches, public ReportsProgres
   void read_where(const io::ConfigNode& item, ResidualSpec& r) {
     r.batch_key = "interior";
     if (!item.has("on")) {
-      if (item.has("where")) read_region(item, r);
+      if (item.has("where")) {
+        r.region = read_interior_region(item, "where", domain_, constants_);
+        note_constants(std::optional<io::Expression>(*r.region));
+      }
       return;
     }
     if (!item.has_list("on") && io::to_lower(item.get<std::string>("on")) == "initial") {
@@ -585,15 +580,6 @@ class Pde final : public Problem, public HasFieldBranches, public ReportsProgres
     else r.faces = condition_faces(item, domain_);
     r.where = ResidualSpec::Where::kFaces;
     r.batch_key = "boundary";
-  }
-
-  void read_region(const io::ConfigNode& item, ResidualSpec& r) {
-    r.region = std::make_shared<const io::Expression>(
-        item.get_expression("where", domain_.expression_variables(), constants_));
-    note_constants(std::optional<io::Expression>(*r.region));
-    Random probe(1);
-    const Eigen::VectorXd hit = r.region->evaluate(domain_.sample_interior(probe, 1 << 14));
-    item.require("where", (hit.array() != 0).any(), "no point of 2^14 drawn in the domain lies in this region");
   }
 
   // Distinct term names; no Taylor streams under hard conditions.

@@ -79,7 +79,8 @@ std::optional<double> read_reference(const io::ConfigNode& item) {
 }  // namespace
 
 PdeFunctionals::PdeFunctionals(const io::ConfigNode& node, const Domain& domain, const CompileReads& compile,
-                               const std::vector<std::string>& taken) {
+                               const std::vector<std::string>& taken,
+                               std::shared_ptr<const UnknownConstants> unknowns) {
   node.require(node.is_map() && node.size() > 0,
                "expected a mapping of names to functionals ({integral: EXPR, on: PARTS} or {value: EXPR, at: POINTS})");
   std::vector<std::string> normals = {"nx", "ny", "nz"};
@@ -93,17 +94,23 @@ PdeFunctionals::PdeFunctionals(const io::ConfigNode& node, const Domain& domain,
       for (const std::string& n : normals)
         item.require("integral", std::find(taken.begin(), taken.end(), n) == taken.end(),
                      "the integrand's normal component '" + n + "' is also an output or constant; rename that");
-    Item f = integral ? read_integral(item, domain, compile, normals) : read_value(item, domain, compile);
+    Nodes nodes = integral ? integral_nodes(item, domain) : value_nodes(item, domain);
+    const CompiledReads reads = compile(item, integral ? "integral" : "value", integral ? normals : std::vector<std::string>{});
+    Item f;
     f.name = name;
+    f.spec = reads.spec;
+    f.expression = std::make_shared<const ExpressionResidual>(reads.expression, reads.symbols,
+                                                              std::move(nodes.coordinates), unknowns,
+                                                              reads.unknown_reads);
+    f.inputs = std::move(nodes.inputs);
+    f.weights = std::move(nodes.weights);
     f.reference = read_reference(item);
     item.reject_unknown_keys();
     items_.push_back(std::move(f));
   }
 }
 
-PdeFunctionals::Item PdeFunctionals::read_integral(const io::ConfigNode& item, const Domain& domain,
-                                                   const CompileReads& compile,
-                                                   const std::vector<std::string>& normals) const {
+PdeFunctionals::Nodes PdeFunctionals::integral_nodes(const io::ConfigNode& item, const Domain& domain) {
   item.require(domain.parameter_count() == 0,
                "an integral over a parametric field's domain needs the parameters' values, which functionals do "
                "not take; remove the constants' range or the functional");
@@ -125,7 +132,7 @@ PdeFunctionals::Item PdeFunctionals::read_integral(const io::ConfigNode& item, c
     space_normals = std::move(nodes.normals);
     weights = std::move(nodes.weights);
   }
-  Item f;
+  Nodes f;
   const Eigen::Index n = space.rows(), d = domain.input_dim();
   f.inputs.resize(n, d);
   f.inputs.leftCols(space.cols()) = space;
@@ -138,21 +145,19 @@ PdeFunctionals::Item PdeFunctionals::read_integral(const io::ConfigNode& item, c
                  "expected a time in [" + io::format_number(t0) + ", " + io::format_number(t1) + "]");
     f.inputs.col(domain.time_column()).setConstant(t);
   }
-  f.expression.resize(n, d + space.cols());
-  f.expression << f.inputs, space_normals;
+  f.coordinates.resize(n, d + space.cols());
+  f.coordinates << f.inputs, space_normals;
   f.weights = std::move(weights);
-  f.reads = compile(item, "integral", normals);
   return f;
 }
 
-PdeFunctionals::Item PdeFunctionals::read_value(const io::ConfigNode& item, const Domain& domain,
-                                                const CompileReads& compile) const {
+PdeFunctionals::Nodes PdeFunctionals::value_nodes(const io::ConfigNode& item, const Domain& domain) {
   const auto d = domain.input_dim();
   const std::string names = io::join(domain.input_names());
   item.require("at", item.has("at") && item.child("at").is_sequence() && item.child("at").size() > 0,
                "expected 'at': a list of points [" + names + "]");
   const io::ConfigNode at = item.child("at");
-  Item f;
+  Nodes f;
   f.inputs.resize(static_cast<Eigen::Index>(at.size()), d);
   const Eigen::VectorXd lower = domain.input_lower(), upper = domain.input_upper();
   for (std::size_t i = 0; i < at.size(); ++i) {
@@ -168,14 +173,16 @@ PdeFunctionals::Item PdeFunctionals::read_value(const io::ConfigNode& item, cons
     }
   }
   // Points on the boundary count (a pressure on a body's surface): ψ ≥ 0 up to rounding.
-  if (const geometry::Geometry* g = domain.geometry())
+  if (const geometry::Geometry* g = domain.geometry()) {
+    const int space = domain.space_dim();
+    const double tolerance = 1e-9 * (upper.head(space) - lower.head(space)).maxCoeff();
     for (Eigen::Index i = 0; i < f.inputs.rows(); ++i) {
       geometry::Vec3 x = geometry::Vec3::Zero();
-      for (int a = 0; a < domain.space_dim(); ++a) x(a) = f.inputs(i, a);
-      const double tolerance = 1e-9 * (upper.head(domain.space_dim()) - lower.head(domain.space_dim())).maxCoeff();
+      x.head(space) = f.inputs.row(i).head(space).transpose();
       at.at(static_cast<std::size_t>(i)).require(g->distance(x).v >= -tolerance,
                                                  "the point lies outside the domain's geometry");
     }
+  }
   f.weights = Eigen::VectorXd::Ones(f.inputs.rows());
   if (item.has("coefficients")) {
     const auto c = item.get<std::vector<double>>("coefficients");
@@ -187,24 +194,20 @@ PdeFunctionals::Item PdeFunctionals::read_value(const io::ConfigNode& item, cons
       f.weights(static_cast<Eigen::Index>(i)) = c[i];
     }
   }
-  f.expression = f.inputs;
-  f.reads = compile(item, "value", {});
+  f.coordinates = f.inputs;
   return f;
 }
 
-std::vector<std::pair<std::string, double>> PdeFunctionals::values(
-    const OutputContext& context, const std::shared_ptr<const UnknownConstants>& unknowns) const {
+std::vector<std::pair<std::string, double>> PdeFunctionals::values(const OutputContext& context) const {
   std::vector<std::pair<std::string, double>> out;
   for (const Item& f : items_) {
-    const autodiff::StreamLayout layout(f.reads.spec);
-    const ExpressionResidual residual(f.reads.expression, f.reads.symbols, f.expression, unknowns,
-                                      f.reads.unknown_reads);
+    const autodiff::StreamLayout layout(f.spec);
     double sum = 0;
     Eigen::MatrixXd r;
     for (Eigen::Index first = 0; first < f.inputs.rows(); first += kBlock) {
       const Eigen::Index n = std::min(kBlock, f.inputs.rows() - first);
       const autodiff::Streams<double> streams = context.streams(layout, f.inputs.middleRows(first, n));
-      residual.evaluate(first, layout, streams, r);
+      f.expression->evaluate(first, layout, streams, r);
       sum += f.weights.segment(first, n).dot(r.col(0));
     }
     out.emplace_back(f.name, sum);
@@ -212,9 +215,8 @@ std::vector<std::pair<std::string, double>> PdeFunctionals::values(
   return out;
 }
 
-void PdeFunctionals::write(const OutputContext& context, const std::shared_ptr<const UnknownConstants>& unknowns,
-                           std::vector<std::pair<std::string, double>>& metrics) const {
-  const auto computed = values(context, unknowns);
+void PdeFunctionals::write(const OutputContext& context, std::vector<std::pair<std::string, double>>& metrics) const {
+  const auto computed = values(context);
   for (std::size_t k = 0; k < items_.size(); ++k) {
     const auto& [name, value] = computed[k];
     metrics.emplace_back("functional_" + name, value);

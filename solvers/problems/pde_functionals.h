@@ -24,7 +24,8 @@
 // `value`: Σₖ cₖ e(xₖ) at the listed points (inputs in the field's order: space, then t).
 //
 // e compiles as a residual does (solvers/problems/pde.cc, compile_residual), so it costs the
-// streams of the symbols it reads, and it is evaluated by ExpressionResidual.
+// streams of the symbols it reads, and it is evaluated by an ExpressionResidual built once at
+// load over the nodes (with the normals as coordinate slots after the inputs).
 #pragma once
 
 #include <functional>
@@ -41,6 +42,7 @@
 #include "io/config.h"
 #include "solvers/core/domain.h"
 #include "solvers/core/problem.h"
+#include "solvers/core/residual.h"
 #include "solvers/core/unknowns.h"
 #include "solvers/problems/pde_streams.h"
 
@@ -61,31 +63,36 @@ using CompileReads =
 class PdeFunctionals {
  public:
   PdeFunctionals() = default;
-  // `taken`: names nx, ny, nz may not be (outputs, constants). Errors are located ConfigErrors.
+  // `taken`: names nx, ny, nz may not be (outputs, constants). `unknowns` (may be null): the
+  // unknown constants an expression reads, at their values when evaluated. Errors are located
+  // ConfigErrors.
   PdeFunctionals(const io::ConfigNode& node, const Domain& domain, const CompileReads& compile,
-                 const std::vector<std::string>& taken);
+                 const std::vector<std::string>& taken, std::shared_ptr<const UnknownConstants> unknowns);
 
   bool empty() const { return items_.empty(); }
   // (name, value) in the config's order.
-  std::vector<std::pair<std::string, double>> values(const OutputContext& context,
-                                                     const std::shared_ptr<const UnknownConstants>& unknowns) const;
+  std::vector<std::pair<std::string, double>> values(const OutputContext& context) const;
   // Prints one line per functional and adds functional_NAME (and with a reference
   // functional_NAME_reference and functional_NAME_rel_error) to `metrics`.
-  void write(const OutputContext& context, const std::shared_ptr<const UnknownConstants>& unknowns,
-             std::vector<std::pair<std::string, double>>& metrics) const;
+  void write(const OutputContext& context, std::vector<std::pair<std::string, double>>& metrics) const;
 
  private:
+  // Where a functional evaluates the field, and what it sums there.
+  struct Nodes {
+    Eigen::MatrixXd inputs;       // n × input_dim: where the field is evaluated
+    Eigen::MatrixXd coordinates;  // n × (input_dim + normals): the expression's coordinate slots
+    Eigen::VectorXd weights;
+  };
   struct Item {
     std::string name;
-    CompiledReads reads;
-    Eigen::MatrixXd inputs;       // n × input_dim: where the field is evaluated
-    Eigen::MatrixXd expression;   // n × (input_dim + normals): the expression's coordinate slots
+    autodiff::StreamSpec spec;
+    std::shared_ptr<const Residual> expression;  // over Nodes::coordinates
+    Eigen::MatrixXd inputs;
     Eigen::VectorXd weights;
     std::optional<double> reference;
   };
-  Item read_integral(const io::ConfigNode& item, const Domain& domain, const CompileReads& compile,
-                     const std::vector<std::string>& normals) const;
-  Item read_value(const io::ConfigNode& item, const Domain& domain, const CompileReads& compile) const;
+  static Nodes integral_nodes(const io::ConfigNode& item, const Domain& domain);
+  static Nodes value_nodes(const io::ConfigNode& item, const Domain& domain);
 
   std::vector<Item> items_;
 };

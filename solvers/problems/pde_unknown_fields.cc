@@ -2,7 +2,6 @@
 #include "solvers/problems/pde_unknown_fields.h"
 
 #include <algorithm>
-#include <cctype>
 #include <cstdio>
 
 #include "io/text.h"
@@ -10,11 +9,6 @@
 namespace nfield::solvers {
 
 namespace {
-
-bool is_plain_name(const std::string& name) {
-  return !name.empty() && std::isalpha(static_cast<unsigned char>(name[0])) &&
-         std::all_of(name.begin(), name.end(), [](char c) { return std::isalnum(static_cast<unsigned char>(c)); });
-}
 
 bool contains(const std::vector<std::string>& names, const std::string& name) {
   return std::find(names.begin(), names.end(), name) != names.end();
@@ -63,7 +57,7 @@ PdeUnknownFields::PdeUnknownFields(const io::ConfigNode& node, const std::vector
   std::vector<std::string> own_names;
   std::vector<io::ConfigNode> own_items;
   for (const std::string& name : node.keys()) {
-    node.require(name, is_plain_name(name),
+    node.require(name, io::is_name(name, false),
                  "unknown field name '" + name + "' must be letters and digits, starting with a letter");
     node.require(name, !contains(reserved, name),
                  "unknown field name '" + name + "' is taken (reserved: " + io::join(reserved) + ")");
