@@ -4,8 +4,10 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <optional>
 
 #include "io/hdf5_file.h"
+#include "solvers/run/latent_run.h"
 #include "solvers/run/run.h"
 
 namespace nfield::apps {
@@ -27,6 +29,16 @@ struct RenderArguments {
   std::string out;
 };
 
+struct FitCodeArguments {
+  std::string checkpoint;
+  std::string config;
+  std::vector<std::string> overrides;
+  std::string out;
+  bool fine_tune = false;
+  std::optional<int> steps;
+  std::optional<double> lr;
+};
+
 struct EvalArguments {
   std::string checkpoint;
   int grid = 128;
@@ -44,6 +56,34 @@ const CLI::Validator kCheckpointFile(
       return {};
     },
     "CHECKPOINT");
+
+void add_fit_code_command(CLI::App& app) {
+  auto fit = std::make_shared<FitCodeArguments>();
+  CLI::App* fit_command = app.add_subcommand(
+      "fit-code", "Fit latent codes with a trained latent field (field.latent) to new signals, the field frozen");
+  fit_command->add_option("checkpoint", fit->checkpoint, "A checkpoint.h5 of an auto-decoder run (field.latent)")
+      ->required()
+      ->check(CLI::ExistingFile)
+      ->check(kCheckpointFile);
+  fit_command->add_option("config", fit->config, "A config whose signals to fit: a family's held-out instances, or one signal")
+      ->required()
+      ->check(CLI::ExistingFile);
+  fit_command->add_option("--set", fit->overrides, "Override a config value: key.path=value (repeatable)");
+  fit_command->add_option("--out", fit->out, "Output folder (overrides output.dir)");
+  fit_command->add_flag("--fine-tune", fit->fine_tune, "Train every parameter of the field with the code");
+  fit_command->add_option("--steps", fit->steps, "Adam steps (default: training.auto_decoder.fit_steps)")
+      ->check(CLI::Range(0, 1 << 24));
+  fit_command->add_option("--lr", fit->lr, "Adam's rate (default: training.auto_decoder.fit_lr)")
+      ->check(CLI::Range(1e-12, 1e3));
+  fit_command->callback([fit] {
+    solvers::RunSetup setup = solvers::load_run(fit->config, fit->overrides, fit->out);
+    try {
+      solvers::fit_codes(fit->checkpoint, setup, {fit->fine_tune, fit->steps, fit->lr});
+    } catch (const std::invalid_argument& e) {
+      throw CLI::ValidationError("checkpoint", e.what());
+    }
+  });
+}
 
 }  // namespace
 
@@ -91,6 +131,8 @@ void add_run_commands(CLI::App& app) {
         eval->out.empty() ? std::filesystem::path(eval->checkpoint).parent_path() / "eval" : std::filesystem::path(eval->out);
     solvers::evaluate_checkpoint(eval->checkpoint, eval->grid, out);
   });
+
+  add_fit_code_command(app);
 
   auto render = std::make_shared<RenderArguments>();
   CLI::App* render_command = app.add_subcommand(

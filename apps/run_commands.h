@@ -5,7 +5,7 @@
 
 namespace nfield::apps {
 
-// `nfield run`, `nfield validate` and `nfield eval`.
+// `nfield run`, `nfield validate`, `nfield eval`, `nfield fit-code` and `nfield render`.
 void add_run_commands(CLI::App& app);
 
 }  // namespace nfield::apps

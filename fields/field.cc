@@ -10,6 +10,7 @@
 #include "autodiff/on_columns.h"
 #include "fields/field_branches.h"
 #include "fields/field_type.h"
+#include "fields/latent_code.h"
 
 namespace nfield::fields {
 namespace {
@@ -117,6 +118,8 @@ Field<Scalar>::Field(FieldOptions options, autodiff::SequentialOptions evaluatio
   scales_ = type.output_scales(options_);
   output_scale_ = type.output_scale(options_);
   all_scales_ = scales_ > 1 && type.trains_all_scales(options_);
+  for (size_t m = 0; m < network_.modules().size(); ++m)
+    if (dynamic_cast<const LatentCode<Scalar>*>(network_.modules()[m].get())) latent_offset_ = network_.parameter_offset(m);
   parameters_.setZero(network_.parameter_count());
   initialize();
 }

@@ -51,6 +51,11 @@ class Field {
   const autodiff::Sequential<Scalar>& network() const { return network_; }
   autodiff::Sequential<Scalar>& network() { return network_; }
 
+  // The latent code's slice of θ (fields/latent_code.h): its first index and its length c;
+  // (−1, 0) when the field takes no code.
+  Eigen::Index latent_offset() const { return latent_offset_; }
+  int latent_size() const { return options_.latent_size; }
+
   // Draws θ from the initialization of `options().type` with `options().seed`; the first
   // layer's weights on cusp features that enter late (encoding.from_stage > 0) are zero.
   void initialize();
@@ -118,6 +123,7 @@ class Field {
   int scales_ = 1, output_scale_ = 0;
   bool all_scales_ = false;
   Eigen::Index extra_ = 0;
+  Eigen::Index latent_offset_ = -1;
   std::vector<int> parts_;  // with branches: each module's part (fields/field_branches.h); else empty
 };
 

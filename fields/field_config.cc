@@ -38,6 +38,12 @@ FieldOptions field_options_from_config(const io::ConfigNode& node, int input_dim
     // Means and variances: the problem appends the variances (solvers/run/run.cc checks it can).
     if (reads_variances(o.encoding)) o.input_dim += type.variance_inputs(o);
   }
+  if (node.has("latent")) {
+    const io::ConfigNode latent = node.child("latent");
+    o.latent_size = latent.get<int>("size");
+    latent.require("size", o.latent_size >= 1 && o.latent_size <= 4096, "expected a code size in [1, 4096]");
+    latent.reject_unknown_keys();
+  }
   node.reject_unknown_keys();
   try {
     o.validate();
@@ -57,6 +63,7 @@ YAML::Node to_yaml(const FieldOptions& o, std::vector<std::string> input_names) 
   n["first_omega"] = o.first_omega;
   n["hidden_omega"] = o.hidden_omega;
   n["seed"] = o.seed;
+  if (o.latent_size > 0) n["latent"]["size"] = o.latent_size;
   n["encoding"]["type"] = o.encoding.type;
   YAML::Node encoding = n["encoding"];
   encoding_type(o.encoding.type).write(o.encoding, {o.input_dim, o.seed, std::move(input_names)},

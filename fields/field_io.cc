@@ -8,15 +8,20 @@
 #include "fields/encoding_type.h"
 #include "fields/field_branches.h"
 #include "fields/field_type.h"
+#include "fields/latent_code.h"
 
 namespace nfield::fields {
 namespace {
 
-// Dense layers are saved as layers/K; the one other module with parameters, the encoding,
-// as encoding_parameters.
+// Dense layers are saved as layers/K; a latent code as latent_code; the one other module with
+// parameters, the encoding, as encoding_parameters.
 template <typename Scalar>
 bool is_dense(const autodiff::Module<Scalar>& module) {
   return dynamic_cast<const Dense<Scalar>*>(&module) != nullptr;
+}
+template <typename Scalar>
+std::string vector_dataset(const autodiff::Module<Scalar>& module) {
+  return dynamic_cast<const LatentCode<Scalar>*>(&module) ? "latent_code" : "encoding_parameters";
 }
 
 }  // namespace
@@ -34,6 +39,7 @@ void save_field(io::H5Writer& file, const Field<Scalar>& field, const std::strin
   file.write_attribute(group, "first_omega", o.first_omega);
   file.write_attribute(group, "hidden_omega", o.hidden_omega);
   file.write_attribute(group, "seed", static_cast<std::int64_t>(o.seed));
+  if (o.latent_size > 0) file.write_attribute(group, "latent_size", static_cast<std::int64_t>(o.latent_size));
   file.write_attribute(group, "precision", std::is_same_v<Scalar, float> ? "float" : "double");
   file.write_attribute(group, "encoding_type", o.encoding.type);
   if (!o.encoding.lower.empty()) {
@@ -53,7 +59,7 @@ void save_field(io::H5Writer& file, const Field<Scalar>& field, const std::strin
     if (count == 0) continue;
     const Scalar* p = field.parameters().data() + field.network().parameter_offset(m);
     if (!is_dense(owner)) {
-      file.write(group + "/encoding_parameters", Eigen::Map<const autodiff::Vector<Scalar>>(p, count));
+      file.write(group + "/" + vector_dataset(owner), Eigen::Map<const autodiff::Vector<Scalar>>(p, count));
       continue;
     }
     const std::string prefix = group + "/layers/" + std::to_string(layer++);
@@ -73,6 +79,8 @@ FieldOptions load_field_options(const io::H5Reader& file, const std::string& gro
   o.first_omega = file.read_attribute<double>(group, "first_omega");
   o.hidden_omega = file.read_attribute<double>(group, "hidden_omega");
   o.seed = static_cast<std::uint64_t>(file.read_attribute<std::int64_t>(group, "seed"));
+  if (file.has_attribute(group, "latent_size"))
+    o.latent_size = static_cast<int>(file.read_attribute<std::int64_t>(group, "latent_size"));
   o.encoding.type = file.read_attribute<std::string>(group, "encoding_type");
   if (file.has_attribute(group, "encoding_lower")) {
     o.encoding.lower = file.read_attribute<std::vector<double>>(group, "encoding_lower");
@@ -96,10 +104,11 @@ Field<Scalar> load_field(const io::H5Reader& file, const std::string& group) {
     if (count == 0) continue;
     Scalar* p = field.parameters().data() + field.network().parameter_offset(m);
     if (!is_dense(owner)) {
-      const auto values = file.read_vector<Scalar>(group + "/encoding_parameters");
+      const std::string dataset = group + "/" + vector_dataset(owner);
+      const auto values = file.read_vector<Scalar>(dataset);
       if (values.size() != count)
-        throw io::H5Error(file.path().string() + ": " + group + "/encoding_parameters has " +
-                          std::to_string(values.size()) + " values, the encoding needs " +
+        throw io::H5Error(file.path().string() + ": " + dataset + " has " +
+                          std::to_string(values.size()) + " values, the field needs " +
                           std::to_string(count));
       Eigen::Map<autodiff::Vector<Scalar>>(p, count) = values;
       continue;

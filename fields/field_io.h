@@ -17,6 +17,9 @@
 //                               (dense layers only: the field's own, then each branch's)
 //   /field/layers/K/bias        out
 //   /field/encoding             the fixed encoding matrix B (m × d), when there is one
+//   /field/latent_code          the field's own latent code z (c values; attribute latent_size),
+//                               when it takes one (fields/latent_code.h; a family's table of
+//                               codes is /latent/codes, solvers/run/latent_run.h)
 //   /field/encoding_parameters  the trained parameters of an encoding, when it has any, in
 //                               its own layout (hash_grid: the tables level after level,
 //                               rows × features, fields/hash_grid.h)

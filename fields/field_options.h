@@ -17,6 +17,15 @@
 //   acorn  adaptive blocks: a coordinate encoder gives each block of a quadtree/octree a
 //          feature grid, a small decoder reads it (fields/acorn.h; keys: fields/acorn_type.cc).
 //
+// `latent_size` c > 0 (`field.latent: {size: c}`, siren and mlp): a latent code z ∈ R^c, one per
+// instance of a family, joins the first hidden layer's output, x → γ(x) → Dense → σ → [· | z]
+// → Dense → … (fields/latent_code.h). Joined there rather than to x itself: a SIREN's first
+// layer draws its weights from U(−1/n, 1/n) with n its fan-in, so codes among its inputs would
+// shrink the frequencies it spans on x; the first hidden layer is SIREN's own encoding of x
+// (a sum of sines), so z joins the encoded coordinates, as DeepSDF joins it to its input. A
+// shift of every hidden layer's activations (FiLM) is the other common choice; concatenation
+// is the default and the only one so far: it adds c·width weights and nothing else.
+//
 // `hidden` lists the H hidden widths: the SIREN reference network of the paper, d → 256,
 // three 256 → 256 layers and 256 → 1, is hidden = [256, 256, 256, 256].
 // Complex-valued fields use output_dim = 2 (real, imaginary).
@@ -46,6 +55,7 @@ struct FieldOptions {
   std::vector<int> color_hidden{64};  // nerf: widths of the colour layers
   int direction_frequencies = 4;      // nerf: octaves of the view direction's encoding
   std::uint64_t seed = 0;             // initial weights
+  int latent_size = 0;                // c: a latent code per instance (above); 0: none
   // A field type's own options beyond those above, as the type's own typed struct: an outside
   // type (fields/field_type.h) sets it in FieldType::read and load, and reads it back with
   // std::any_cast in append_modules, initial_bounds, validate, write and save. Empty for the

@@ -38,6 +38,8 @@ class FieldType {
   // The type's own rules of FieldOptions::validate; std::invalid_argument naming the option
   // ("field.KEY = VALUE: rule").
   virtual void validate(const FieldOptions&) const {}
+  // Whether the type's network takes a latent code (FieldOptions::latent_size).
+  virtual bool takes_latent_code() const { return false; }
   // The inputs the encoding sees (a radiance field encodes the position, not the direction),
   // its variance columns included when it reads them (EncodingType::reads_variances).
   virtual int encoded_inputs(const FieldOptions& options) const { return options.input_dim; }

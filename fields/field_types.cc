@@ -13,6 +13,7 @@
 #include "fields/dense.h"
 #include "fields/encoding_type.h"
 #include "fields/field_type.h"
+#include "fields/latent_code.h"
 #include "fields/radiance_network.h"
 #include "io/registry.h"
 #include "io/text.h"
@@ -43,6 +44,10 @@ FeatureEncoding<Scalar>* append_coordinate_network(const FieldOptions& o, bool s
     const ActivationSpec spec{siren ? "sine" : o.activation,
                               siren && l == 0 ? o.first_omega : o.hidden_omega};
     network.add(std::make_unique<ActivationLayer<Scalar>>(spec, width));
+    if (l == 0 && o.latent_size > 0) {
+      network.add(std::make_unique<LatentCode<Scalar>>(width, o.latent_size));
+      width += o.latent_size;
+    }
   }
   network.add(std::make_unique<Dense<Scalar>>(width, o.output_dim));
   return late_features;
@@ -52,6 +57,7 @@ class SirenType final : public FieldTypeOf<SirenType> {
  public:
   std::string default_activation() const override { return "sine"; }
   bool has_activation() const override { return false; }
+  bool takes_latent_code() const override { return true; }
   template <typename Scalar>
   static FeatureEncoding<Scalar>* append(const FieldOptions& o, autodiff::Sequential<Scalar>& network) {
     return append_coordinate_network(o, true, network);
@@ -66,6 +72,7 @@ class SirenType final : public FieldTypeOf<SirenType> {
 class MlpType final : public FieldTypeOf<MlpType> {
  public:
   std::string default_activation() const override { return "tanh"; }
+  bool takes_latent_code() const override { return true; }
   template <typename Scalar>
   static FeatureEncoding<Scalar>* append(const FieldOptions& o, autodiff::Sequential<Scalar>& network) {
     return append_coordinate_network(o, false, network);
@@ -182,6 +189,13 @@ void FieldOptions::validate() const {
       reject("activation", activation, e.what());
     }
   }
+  if (latent_size < 0 || latent_size > 4096)
+    reject("latent.size", std::to_string(latent_size), "must be in [1, 4096]");
+  if (latent_size > 0 && !kind.takes_latent_code())
+    reject("latent", "{size: " + std::to_string(latent_size) + "}",
+           "field.type " + type + " takes no latent code (siren and mlp do)");
+  if (latent_size > 0 && !branches.empty())
+    reject("latent", "{size: " + std::to_string(latent_size) + "}", "a field with unknown-field branches takes no latent code");
   if (!(first_omega > 0)) reject("first_omega", std::to_string(first_omega), "must be > 0");
   if (!(hidden_omega > 0)) reject("hidden_omega", std::to_string(hidden_omega), "must be > 0");
   encoding.validate();

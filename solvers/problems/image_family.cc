@@ -35,10 +35,10 @@ std::vector<fs::path> family_files(const io::ConfigNode& family, const fs::path&
 
 std::string size_text(int width, int height) { return std::to_string(width) + " x " + std::to_string(height); }
 
-// The order of the pictures: training ones first, in file order, then the held-out ones in
-// the order held_out gives (file order for a count).
+}  // namespace
+
 std::vector<std::size_t> held_out_last(const io::ConfigNode& family, const std::vector<fs::path>& files,
-                                       std::size_t& training) {
+                                       std::size_t& training, const std::string& noun) {
   std::vector<std::size_t> held;
   const int count = static_cast<int>(files.size());
   if (family.has_list("held_out")) {
@@ -49,13 +49,13 @@ std::vector<std::size_t> held_out_last(const io::ConfigNode& family, const std::
         return f.filename().string() == name || f.string() == name;
       });
       if (it == files.end())
-        throw list.at(i).error("'" + name + "' is none of the family's pictures (expected a file name such as " +
+        throw list.at(i).error("'" + name + "' is none of the family's " + noun + " (expected a file name such as " +
                                files.front().filename().string() + ")");
       const auto k = static_cast<std::size_t>(it - files.begin());
       if (std::find(held.begin(), held.end(), k) != held.end()) throw list.at(i).error("'" + name + "' is held out twice");
       held.push_back(k);
     }
-    family.require("held_out", static_cast<int>(held.size()) < count, "expected at least one picture left for training");
+    family.require("held_out", static_cast<int>(held.size()) < count, "expected at least one of the " + noun + " left for training");
   } else if (family.has("held_out")) {
     const int n = family.get_in_range("held_out", 0, count - 1);
     for (int k = count - n; k < count; ++k) held.push_back(static_cast<std::size_t>(k));
@@ -68,7 +68,6 @@ std::vector<std::size_t> held_out_last(const io::ConfigNode& family, const std::
   return order;
 }
 
-}  // namespace
 
 std::optional<std::pair<int, int>> read_crop_size(const io::ConfigNode& node) {
   if (!node.has("crop")) return std::nullopt;
@@ -87,7 +86,7 @@ ImageFamily read_image_family(const io::ConfigNode& family, const fs::path& conf
   const std::vector<fs::path> files = family_files(family, config_dir);
   const std::optional<std::pair<int, int>> crop = read_crop_size(family);
   ImageFamily out;
-  const std::vector<std::size_t> order = held_out_last(family, files, out.training);
+  const std::vector<std::size_t> order = held_out_last(family, files, out.training, "pictures");
   int first_width = 0, first_height = 0, chosen_channels = 0;
   for (std::size_t k = 0; k < files.size(); ++k) {
     const fs::path& file = files[k];

@@ -38,6 +38,13 @@ struct ImageFamily {
   std::size_t training = 0;        // how many are for training
 };
 
+// The order of a family's files (equation.family.held_out, of pictures or meshes): training
+// ones first, in file order, then the held-out ones in the order held_out gives (a list of file
+// names) or the last n (a count); `training` is set to how many are for training. Errors are
+// located at held_out and name the family's `noun` ("pictures").
+std::vector<std::size_t> held_out_last(const io::ConfigNode& family, const std::vector<std::filesystem::path>& files,
+                                       std::size_t& training, const std::string& noun);
+
 // The `crop` key of `node` (equation, or equation.family): n or [width, height], each in
 // [1, 65536]; nullopt when absent.
 std::optional<std::pair<int, int>> read_crop_size(const io::ConfigNode& node);

@@ -22,6 +22,21 @@
 //
 //     loss: siren              # siren | squares (below)
 //
+// A family of shapes (issue 28: DeepSDF's auto-decoder, field.latent; solvers/run/latent_run.h)
+// replaces `points` and `reference_mesh` with
+//
+//     family:
+//       meshes: ../data/meshes/family    # a folder (its *.ply, *.obj, *.vtp, *.off in name
+//                                        #   order) or a list of files; at least two
+//       held_out: [elephant.ply]         # the last n, or a list of file names
+//       surface_points: 50000            # points drawn on each mesh (≥ 1000)
+//
+// Each mesh is both an instance's oriented points (surface_points drawn on its triangles in
+// proportion to their areas, each with its face's normal; seeded per mesh) and its reference
+// mesh; each is normalized into the domain on its own, so every shape fills it
+// alike. The settings above are shared. The family problem itself stands for its first
+// training shape.
+//
 // Loss terms (each a mean over its points; w_* the weights above, ĝ = ∇u/|∇u|):
 //   "surface"   batch `surface`: points drawn uniformly (with replacement) from the cloud,
 //               ‖r‖² = w_sdf |u| + w_normal (1 − cos(∇u, n)) + w_eikonal ||∇u| − 1|,
@@ -82,8 +97,11 @@
 #include <cstring>
 #include <filesystem>
 #include <limits>
+#include <mutex>
 #include <string>
 #include <unordered_map>
+
+#include <Eigen/Geometry>
 
 
 #include "io/grid.h"
@@ -91,9 +109,12 @@
 #include "io/isosurface.h"
 #include "io/mesh_distance.h"
 #include "io/surface_components.h"
+#include "io/text.h"
 #include "io/point_cloud.h"
 #include "io/triangle_mesh.h"
 #include "io/vtk_polydata.h"
+#include "solvers/core/problem_capabilities.h"
+#include "solvers/problems/image_family.h"
 #include "solvers/problems/problems.h"
 #include "solvers/problems/sdf_residual.h"
 
@@ -137,81 +158,259 @@ Domain sdf_domain(const io::ConfigNode& root) {
 }
 
 
-class Sdf final : public Problem {
+// The loss settings every shape of a run shares (a family's instances too).
+struct SdfSettings {
+  bool normalize = true;
+  double margin = 0.1;
+  SdfWeights weights;
+  double box_weight = 0;
+};
+
+// One shape: its oriented points in domain coordinates, how they map back to the cloud's own,
+// its reference mesh, and the face pool of the box term.
+struct SdfShape {
+  Eigen::MatrixXd points, normals;  // in domain coordinates
+  std::unordered_map<PointKey, Eigen::Index, PointKeyHash> index;
+  double scale = 1;
+  Eigen::Vector3d center = Eigen::Vector3d::Zero(), domain_center = Eigen::Vector3d::Zero();
+  std::shared_ptr<io::TriangleMesh> reference;
+
+  // The box term's face pool: points in domain coordinates, their distances to the shape's
+  // points, and the lookup by coordinates; made at the first draw (loading a config, as
+  // `nfield validate` and the config tests do, never needs it).
+  struct BoxPool {
+    Eigen::MatrixXd points;
+    Eigen::VectorXd distances;
+    std::unordered_map<PointKey, Eigen::Index, PointKeyHash> index;
+  };
+  const BoxPool& box_pool(const Domain& domain) const;
+
+ private:
+  mutable std::once_flag box_once_;
+  mutable BoxPool box_;
+};
+
+// Reads `key` of `node` (a cloud or a mesh file, relative to config_dir) into a shape; errors
+// are located at that key.
+io::OrientedPoints read_cloud(const io::ConfigNode& node, const std::string& key, const std::filesystem::path& path) {
+  try {
+    return io::read_oriented_points(path);
+  } catch (const std::exception& e) {
+    throw node.error(key, e.what());
+  }
+}
+
+// n points on the mesh's triangles with their face normals: a triangle with probability ∝ its
+// area (binary search in the cumulative areas), a point in it by (1 − √u₁) a + √u₁ (1 − u₂) b
+// + √u₁ u₂ c. A mesh's vertices alone can be too few to pin its surface down (sphere.ply has
+// 162), and they crowd where the mesh is fine rather than where the surface is.
+io::OrientedPoints surface_samples(const io::TriangleMesh& mesh, Eigen::Index n, std::uint64_t seed) {
+  const Eigen::Index m = mesh.triangles.rows();
+  Eigen::MatrixXd normals(m, 3);
+  std::vector<double> cumulative(static_cast<std::size_t>(m));
+  double total = 0;
+  for (Eigen::Index t = 0; t < m; ++t) {
+    const Eigen::Vector3d a = mesh.vertices.row(mesh.triangles(t, 0)), b = mesh.vertices.row(mesh.triangles(t, 1)),
+                          c = mesh.vertices.row(mesh.triangles(t, 2));
+    const Eigen::Vector3d cross = (b - a).cross(c - a);
+    const double twice_area = cross.norm();
+    normals.row(t) = twice_area > 0 ? Eigen::RowVector3d(cross.transpose() / twice_area) : Eigen::RowVector3d::Zero();
+    total += 0.5 * twice_area;
+    cumulative[static_cast<std::size_t>(t)] = total;
+  }
+  Random rng(seed);
+  io::OrientedPoints out;
+  out.points.resize(n, 3);
+  out.normals.resize(n, 3);
+  for (Eigen::Index p = 0; p < n; ++p) {
+    const double pick = uniform01(rng) * total;
+    const auto t = static_cast<Eigen::Index>(
+        std::min<std::ptrdiff_t>(std::upper_bound(cumulative.begin(), cumulative.end(), pick) - cumulative.begin(), m - 1));
+    const double r = std::sqrt(uniform01(rng)), v = uniform01(rng);
+    out.points.row(p) = (1 - r) * mesh.vertices.row(mesh.triangles(t, 0)) +
+                        r * (1 - v) * mesh.vertices.row(mesh.triangles(t, 1)) + r * v * mesh.vertices.row(mesh.triangles(t, 2));
+    out.normals.row(p) = normals.row(t);
+  }
+  return out;
+}
+
+std::shared_ptr<SdfShape> make_shape(const io::ConfigNode& node, const std::string& key, const std::string& name,
+                                     io::OrientedPoints cloud, const SdfSettings& settings, const Domain& domain) {
+  const std::filesystem::path path = name;
+  auto shape = std::make_shared<SdfShape>();
+  // Drop points without a normal.
+  std::vector<Eigen::Index> keep;
+  for (Eigen::Index i = 0; i < cloud.points.rows(); ++i)
+    if (cloud.normals.row(i).squaredNorm() > 0.5 && cloud.points.row(i).allFinite()) keep.push_back(i);
+  node.require(key, !keep.empty(), path.filename().string() + ": the point cloud has no points with normals");
+  if (keep.size() < static_cast<size_t>(cloud.points.rows()))
+    std::printf("sdf: %s: dropped %ld of %ld points without a normal\n", path.filename().string().c_str(),
+                static_cast<long>(cloud.points.rows() - static_cast<Eigen::Index>(keep.size())),
+                static_cast<long>(cloud.points.rows()));
+  shape->points.resize(static_cast<Eigen::Index>(keep.size()), 3);
+  shape->normals.resize(shape->points.rows(), 3);
+  for (size_t k = 0; k < keep.size(); ++k) {
+    shape->points.row(static_cast<Eigen::Index>(k)) = cloud.points.row(keep[k]);
+    shape->normals.row(static_cast<Eigen::Index>(k)) = cloud.normals.row(keep[k]);
+  }
+  const Eigen::Vector3d lower(domain.lower().data()), upper(domain.upper().data());
+  Eigen::MatrixXd& points = shape->points;
+  if (settings.normalize) {
+    const Eigen::Vector3d lo = points.colwise().minCoeff(), hi = points.colwise().maxCoeff();
+    shape->center = 0.5 * (lo + hi);
+    shape->domain_center = 0.5 * (lower + upper);
+    const double half = 0.5 * (hi - lo).maxCoeff();
+    const double room = 0.5 * (upper - lower).minCoeff();
+    shape->scale = half > 0 ? (1 - settings.margin) * room / half : 1.0;
+    points = ((points.rowwise() - shape->center.transpose()) * shape->scale).rowwise() + shape->domain_center.transpose();
+  } else {
+    const bool inside = ((points.rowwise() - lower.transpose()).array() >= 0).all() &&
+                        ((points.rowwise() - upper.transpose()).array() <= 0).all();
+    node.require(key, inside, path.filename().string() + ": the points leave the domain: set normalize: true or widen the domain");
+  }
+  for (Eigen::Index i = 0; i < points.rows(); ++i) shape->index.emplace(key_of(points.row(i).eval().data()), i);
+  return shape;
+}
+
+std::shared_ptr<io::TriangleMesh> read_reference(const io::ConfigNode& node, const std::string& key,
+                                                 const std::filesystem::path& path) {
+  std::shared_ptr<io::TriangleMesh> mesh;
+  try {
+    mesh = std::make_shared<io::TriangleMesh>(io::read_triangle_mesh(path));
+  } catch (const std::exception& e) {
+    throw node.error(key, e.what());
+  }
+  node.require(key, mesh->triangles.rows() > 0, path.filename().string() + ": expected a mesh with triangles");
+  return mesh;
+}
+
+// 6 faces × 96² points, one per cell of a 96 × 96 grid on each face (jittered, seed fixed),
+// and their distances to the shape's points.
+const SdfShape::BoxPool& SdfShape::box_pool(const Domain& domain) const {
+  std::call_once(box_once_, [&] {
+    constexpr int kSide = 96;
+    const Eigen::Vector3d lower(domain.lower().data()), upper(domain.upper().data());
+    box_.points.resize(6 * kSide * kSide, 3);
+    Random rng(20261124);
+    Eigen::Index row = 0;
+    for (int axis = 0; axis < 3; ++axis)
+      for (int side = 0; side < 2; ++side)
+        for (int i = 0; i < kSide; ++i)
+          for (int j = 0; j < kSide; ++j) {
+            const int a = (axis + 1) % 3, b = (axis + 2) % 3;
+            Eigen::RowVector3d p;
+            p(axis) = side == 0 ? lower(axis) : upper(axis);
+            p(a) = lower(a) + (upper(a) - lower(a)) * (i + uniform01(rng)) / kSide;
+            p(b) = lower(b) + (upper(b) - lower(b)) * (j + uniform01(rng)) / kSide;
+            box_.points.row(row++) = p;
+          }
+    box_.distances = io::point_cloud_distance(box_.points, points);
+    for (Eigen::Index p = 0; p < box_.points.rows(); ++p) box_.index.emplace(key_of(box_.points.row(p).eval().data()), p);
+  });
+  return box_;
+}
+
+// The meshes of equation.family (a folder's *.ply, *.obj, *.vtp and *.off in name order, or a
+// list of files), and which are held out (the last n, or a list of file names).
+struct MeshFamily {
+  std::vector<std::filesystem::path> paths;
+  std::vector<std::string> names;
+  std::size_t training = 0;
+};
+
+MeshFamily read_mesh_family(const io::ConfigNode& family, const std::filesystem::path& config_dir) {
+  namespace fs = std::filesystem;
+  MeshFamily out;
+  if (family.has_list("meshes")) {
+    for (const std::string& file : family.get<std::vector<std::string>>("meshes")) out.paths.push_back(config_dir / file);
+  } else {
+    const fs::path folder = config_dir / family.get<std::string>("meshes");
+    family.require("meshes", fs::is_directory(folder), folder.string() + ": no such folder (or a list of mesh files)");
+    for (const auto& entry : fs::directory_iterator(folder)) {
+      const std::string ext = io::to_lower(entry.path().extension().string());
+      if (entry.is_regular_file() && (ext == ".ply" || ext == ".obj" || ext == ".vtp" || ext == ".off"))
+        out.paths.push_back(entry.path());
+    }
+    std::sort(out.paths.begin(), out.paths.end());
+  }
+  family.require("meshes", out.paths.size() >= 2, "expected at least two meshes in a family");
+  (void)family.has("surface_points");  // read by the caller
+  for (const auto& p : out.paths) out.names.push_back(p.filename().string());
+  std::size_t training = 0;
+  const std::vector<std::size_t> order = held_out_last(family, out.paths, training, "meshes");
+  MeshFamily ordered;
+  for (std::size_t k : order) {
+    ordered.paths.push_back(out.paths[k]);
+    ordered.names.push_back(out.names[k]);
+  }
+  ordered.training = training;
+  family.reject_unknown_keys();
+  return ordered;
+}
+
+class Sdf final : public Problem, public HasInstances {
  public:
   explicit Sdf(const ProblemContext& context) : domain_(sdf_domain(context.root)) {
     const io::ConfigNode equation = context.root.child("equation");
-    const std::filesystem::path path = context.config_dir / equation.get<std::string>("points");
-    io::OrientedPoints cloud;
-    try {
-      cloud = io::read_oriented_points(path);
-    } catch (const std::exception& e) {
-      throw equation.error("points", e.what());
-    }
-    // Drop points without a normal.
-    std::vector<Eigen::Index> keep;
-    for (Eigen::Index i = 0; i < cloud.points.rows(); ++i)
-      if (cloud.normals.row(i).squaredNorm() > 0.5 && cloud.points.row(i).allFinite()) keep.push_back(i);
-    equation.require("points", !keep.empty(), "the point cloud has no points with normals");
-    if (keep.size() < static_cast<size_t>(cloud.points.rows()))
-      std::printf("sdf: dropped %ld of %ld points without a normal\n",
-                  static_cast<long>(cloud.points.rows() - static_cast<Eigen::Index>(keep.size())),
-                  static_cast<long>(cloud.points.rows()));
-    points_.resize(static_cast<Eigen::Index>(keep.size()), 3);
-    normals_.resize(points_.rows(), 3);
-    for (size_t k = 0; k < keep.size(); ++k) {
-      points_.row(static_cast<Eigen::Index>(k)) = cloud.points.row(keep[k]);
-      normals_.row(static_cast<Eigen::Index>(k)) = cloud.normals.row(keep[k]);
-    }
-
-    normalize_ = equation.get_or("normalize", true);
-    margin_ = equation.get_or("margin", 0.1);
-    equation.require("margin", margin_ >= 0 && margin_ < 1, "expected a margin in [0, 1)");
-    const Eigen::Vector3d lower(domain_.lower().data()), upper(domain_.upper().data());
-    if (normalize_) {
-      const Eigen::Vector3d lo = points_.colwise().minCoeff(), hi = points_.colwise().maxCoeff();
-      center_ = 0.5 * (lo + hi);
-      domain_center_ = 0.5 * (lower + upper);
-      const double half = 0.5 * (hi - lo).maxCoeff();
-      const double room = 0.5 * (upper - lower).minCoeff();
-      scale_ = half > 0 ? (1 - margin_) * room / half : 1.0;
-      points_ = ((points_.rowwise() - center_.transpose()) * scale_).rowwise() + domain_center_.transpose();
-    } else {
-      const bool inside = ((points_.rowwise() - lower.transpose()).array() >= 0).all() &&
-                          ((points_.rowwise() - upper.transpose()).array() <= 0).all();
-      equation.require("normalize", inside,
-                       "the points leave the domain: set normalize: true or widen the domain");
-    }
-    for (Eigen::Index i = 0; i < points_.rows(); ++i) index_.emplace(key_of(points_.row(i).eval().data()), i);
-
-    weights_.sdf = equation.get_or("sdf_weight", weights_.sdf);
-    weights_.normal = equation.get_or("normal_weight", weights_.normal);
-    weights_.eikonal = equation.get_or("eikonal_weight", weights_.eikonal);
-    weights_.off_surface = equation.get_or("off_surface_weight", weights_.off_surface);
-    weights_.alpha = equation.get_or("off_surface_alpha", weights_.alpha);
-    weights_.absolute = equation.get_choice("loss", {"siren", "squares"}, "siren") == "siren";
+    settings_.normalize = equation.get_or("normalize", true);
+    settings_.margin = equation.get_or("margin", 0.1);
+    equation.require("margin", settings_.margin >= 0 && settings_.margin < 1, "expected a margin in [0, 1)");
+    SdfWeights& weights = settings_.weights;
+    weights.sdf = equation.get_or("sdf_weight", weights.sdf);
+    weights.normal = equation.get_or("normal_weight", weights.normal);
+    weights.eikonal = equation.get_or("eikonal_weight", weights.eikonal);
+    weights.off_surface = equation.get_or("off_surface_weight", weights.off_surface);
+    weights.alpha = equation.get_or("off_surface_alpha", weights.alpha);
+    weights.absolute = equation.get_choice("loss", {"siren", "squares"}, "siren") == "siren";
     for (const char* key : {"sdf_weight", "normal_weight", "eikonal_weight", "off_surface_weight",
                             "off_surface_alpha"})
       if (equation.has(key)) {
         const double w = equation.get<double>(key);
         equation.require(key, w >= 0 && std::isfinite(w), "expected a number >= 0");
       }
-    if (equation.has("reference_mesh")) {
-      try {
-        reference_ = std::make_shared<io::TriangleMesh>(
-            io::read_triangle_mesh(context.config_dir / equation.get<std::string>("reference_mesh")));
-      } catch (const std::exception& e) {
-        throw equation.error("reference_mesh", e.what());
-      }
-      equation.require("reference_mesh", reference_->triangles.rows() > 0, "expected a mesh with triangles");
-    }
-    box_weight_ = equation.has("box_weight") ? equation.get_nonnegative<double>("box_weight") : 0.0;
-    equation.reject_unknown_keys();
-    if (box_weight_ > 0) {
-      equation.require("box_weight", !normalize_ || margin_ > 0,
+    settings_.box_weight = equation.has("box_weight") ? equation.get_nonnegative<double>("box_weight") : 0.0;
+    if (settings_.box_weight > 0)
+      equation.require("box_weight", !settings_.normalize || settings_.margin > 0,
                        "the box term needs the cloud strictly inside the domain: margin > 0");
-      make_box_pool();
+    if (equation.has("family")) {
+      for (const char* key : {"points", "reference_mesh"})
+        equation.require(key, !equation.has(key), "a family names its meshes itself (equation.family.meshes): drop " +
+                                                      std::string(key));
+      const io::ConfigNode family = equation.child("family");
+      const MeshFamily meshes = read_mesh_family(family, context.config_dir);
+      const Eigen::Index samples = family.has("surface_points") ? family.get_in_range("surface_points", 1000, 1 << 24) : 50000;
+      for (std::size_t k = 0; k < meshes.paths.size(); ++k) {
+        auto reference = read_reference(family, "meshes", meshes.paths[k]);
+        auto shape = make_shape(family, "meshes", meshes.names[k], surface_samples(*reference, samples, 20261127 + k),
+                                settings_, domain_);
+        shape->reference = std::move(reference);
+        family_.push_back(std::move(shape));
+      }
+      family_names_ = meshes.names;
+      training_count_ = meshes.training;
+      shape_ = family_.front();
+    } else {
+      const std::filesystem::path points = context.config_dir / equation.get<std::string>("points");
+      auto shape = make_shape(equation, "points", points.filename().string(), read_cloud(equation, "points", points),
+                              settings_, domain_);
+      if (equation.has("reference_mesh"))
+        shape->reference =
+            read_reference(equation, "reference_mesh", context.config_dir / equation.get<std::string>("reference_mesh"));
+      shape_ = std::move(shape);
     }
+    equation.reject_unknown_keys();
+  }
+
+  // One shape of a family: the settings, domain and shape of an instance.
+  Sdf(const Domain& domain, const SdfSettings& settings, std::shared_ptr<const SdfShape> shape)
+      : domain_(domain), settings_(settings), shape_(std::move(shape)) {}
+
+  std::vector<ProblemInstance> instances(bool held_out) const override {
+    std::vector<ProblemInstance> out;
+    const std::size_t first = held_out ? training_count_ : 0, end = held_out ? family_.size() : training_count_;
+    for (std::size_t k = first; k < end; ++k)
+      out.push_back({family_names_[k], std::make_unique<Sdf>(domain_, settings_, family_[k])});
+    return out;
   }
 
   const Domain& domain() const override { return domain_; }
@@ -223,9 +422,9 @@ class Sdf final : public Problem {
     surface.name = "surface";
     surface.batch_key = "surface";
     surface.spec = autodiff::StreamSpec::gradient(3);
-    surface.sample = [this](Random& rng, Eigen::Index n) { return draw_rows(points_, rng, n); };
+    surface.sample = [this](Random& rng, Eigen::Index n) { return draw_rows(shape_->points, rng, n); };
     surface.residual = [this](const Eigen::MatrixXd& x) -> std::unique_ptr<Residual> {
-      return make_sdf_residual(normals_at(x), true, weights_);
+      return make_sdf_residual(normals_at(x), true, settings_.weights);
     };
     LossTerm interior;
     interior.name = "interior";
@@ -233,23 +432,24 @@ class Sdf final : public Problem {
     interior.spec = autodiff::StreamSpec::gradient(3);
     interior.sample = [this](Random& rng, Eigen::Index n) { return domain_.sample_interior(rng, n); };
     interior.residual = [this](const Eigen::MatrixXd&) -> std::unique_ptr<Residual> {
-      return make_sdf_residual(Eigen::MatrixXd(), false, weights_);
+      return make_sdf_residual(Eigen::MatrixXd(), false, settings_.weights);
     };
-    if (box_weight_ == 0) return {surface, interior};
+    if (settings_.box_weight == 0) return {surface, interior};
     LossTerm box;
     box.name = "box";
     box.batch_key = "box";
     box.spec = autodiff::StreamSpec::values(3);
-    box.sample = [this](Random& rng, Eigen::Index n) { return draw_rows(box_points_, rng, n); };
+    box.sample = [this](Random& rng, Eigen::Index n) { return draw_rows(shape_->box_pool(domain_).points, rng, n); };
     box.residual = [this](const Eigen::MatrixXd& x) -> std::unique_ptr<Residual> {
-      const double root = std::sqrt(box_weight_);
+      const double root = std::sqrt(settings_.box_weight);
       Eigen::MatrixXd target(x.rows(), 1);
+      const SdfShape::BoxPool& pool = shape_->box_pool(domain_);
       for (Eigen::Index p = 0; p < x.rows(); ++p) {
         const Eigen::RowVector3d row = x.row(p);
-        const auto it = box_index_.find(key_of(row.data()));
+        const auto it = pool.index.find(key_of(row.data()));
         // Not a pool point (a checkpoint of another pool): the distance computed now.
-        target(p, 0) = root * (it != box_index_.end() ? box_distances_(it->second)
-                                                      : io::point_cloud_distance(row, points_)(0));
+        target(p, 0) = root * (it != pool.index.end() ? pool.distances(it->second)
+                                                      : io::point_cloud_distance(row, shape_->points)(0));
       }
       return std::make_unique<LinearResidual>(
           std::vector<LinearResidual::Term>{
@@ -311,13 +511,13 @@ class Sdf final : public Problem {
     metrics.emplace_back("surface_largest_component_area_share", pieces.largest_area_share);
     if (surface.triangles.rows() > 0) {
       chamfer_metrics(surface, metrics);
-      if (reference_) sign_metrics(grid, u, metrics);
+      if (shape_->reference) sign_metrics(grid, u, metrics);
     } else {
       const double nan = std::numeric_limits<double>::quiet_NaN();
       for (const char* key : {"chamfer_surface_to_mesh", "chamfer_mesh_to_surface", "chamfer_mean", "chamfer_max",
                               "chamfer_mean_per_diagonal", "chamfer_max_per_diagonal", "normal_consistency"})
         metrics.emplace_back(key, nan);
-      if (reference_) {
+      if (shape_->reference) {
         metrics.emplace_back("sign_accuracy", nan);
         metrics.emplace_back("sign_accuracy_band", nan);
       }
@@ -340,18 +540,18 @@ class Sdf final : public Problem {
     const auto started = std::chrono::steady_clock::now();
     io::SurfaceComparison c;
     Eigen::MatrixXd target_points;
-    if (reference_) {
-      c = io::compare_surfaces(surface, *reference_);
-      target_points = reference_->vertices;
+    if (shape_->reference) {
+      c = io::compare_surfaces(surface, *shape_->reference);
+      target_points = shape_->reference->vertices;
     } else {
-      target_points = to_original(points_);
+      target_points = to_original(shape_->points);
       c.a_to_b = io::point_cloud_distance(surface.vertices, target_points);
       const io::ClosestTriangles back = io::closest_triangles(target_points, surface);
       c.b_to_a = back.distance;
       double sum = 0;
       const Eigen::MatrixXd faces = io::triangle_normals(surface);
       for (Eigen::Index p = 0; p < target_points.rows(); ++p)
-        sum += std::abs(normals_.row(p).dot(faces.row(back.triangle(p))));
+        sum += std::abs(shape_->normals.row(p).dot(faces.row(back.triangle(p))));
       c.normal_consistency = sum / static_cast<double>(target_points.rows());
     }
     const double diagonal = (target_points.colwise().maxCoeff() - target_points.colwise().minCoeff()).norm();
@@ -372,18 +572,18 @@ class Sdf final : public Problem {
                     std::vector<std::pair<std::string, double>>& metrics) const {
     const Eigen::Index n = u.size();
     const double nan = std::numeric_limits<double>::quiet_NaN();
-    const double band = 0.05 * (reference_->vertices.colwise().maxCoeff() -
-                                reference_->vertices.colwise().minCoeff()).norm();
+    const double band = 0.05 * (shape_->reference->vertices.colwise().maxCoeff() -
+                                shape_->reference->vertices.colwise().minCoeff()).norm();
     const auto sign_started = std::chrono::steady_clock::now();
     // The grid in the mesh's coordinates (to_original is a shift and a uniform scale).
     io::Grid original = grid;
     const Eigen::RowVector3d origin = to_original(Eigen::RowVector3d(grid.origin[0], grid.origin[1], grid.origin[2]));
     for (int a = 0; a < 3; ++a) {
       original.origin[a] = origin(a);
-      original.spacing[a] = grid.spacing[a] / (normalize_ ? scale_ : 1.0);
+      original.spacing[a] = grid.spacing[a] / (settings_.normalize ? shape_->scale : 1.0);
     }
-    const auto inside = io::inside_closed_mesh(original, *reference_);
-    const auto near_surface = io::grid_near_mesh(original, *reference_, band);
+    const auto inside = io::inside_closed_mesh(original, *shape_->reference);
+    const auto near_surface = io::grid_near_mesh(original, *shape_->reference, band);
     Eigen::Index agree = 0, near = 0, near_agree = 0;
     for (Eigen::Index p = 0; p < n; ++p) {
       const bool same = (u(p) < 0) == inside(p);
@@ -400,32 +600,10 @@ class Sdf final : public Problem {
                          std::chrono::duration<double>(std::chrono::steady_clock::now() - sign_started).count());
   }
 
-  // 6 faces × 96² points, one per cell of a 96 × 96 grid on each face (jittered, seed fixed).
-  void make_box_pool() {
-    constexpr int kSide = 96;
-    const Eigen::Vector3d lower(domain_.lower().data()), upper(domain_.upper().data());
-    box_points_.resize(6 * kSide * kSide, 3);
-    Random rng(20261124);
-    Eigen::Index row = 0;
-    for (int axis = 0; axis < 3; ++axis)
-      for (int side = 0; side < 2; ++side)
-        for (int i = 0; i < kSide; ++i)
-          for (int j = 0; j < kSide; ++j) {
-            const int a = (axis + 1) % 3, b = (axis + 2) % 3;
-            Eigen::RowVector3d p;
-            p(axis) = side == 0 ? lower(axis) : upper(axis);
-            p(a) = lower(a) + (upper(a) - lower(a)) * (i + uniform01(rng)) / kSide;
-            p(b) = lower(b) + (upper(b) - lower(b)) * (j + uniform01(rng)) / kSide;
-            box_points_.row(row++) = p;
-          }
-    box_distances_ = io::point_cloud_distance(box_points_, points_);
-    for (Eigen::Index p = 0; p < box_points_.rows(); ++p) box_index_.emplace(key_of(box_points_.row(p).eval().data()), p);
-  }
-
   // Domain coordinates → the cloud's own.
   Eigen::MatrixXd to_original(const Eigen::MatrixXd& x) const {
-    if (!normalize_) return x;
-    return ((x.rowwise() - domain_center_.transpose()) / scale_).rowwise() + center_.transpose();
+    if (!settings_.normalize) return x;
+    return ((x.rowwise() - shape_->domain_center.transpose()) / shape_->scale).rowwise() + shape_->center.transpose();
   }
 
   // The normals of cloud points x (by exact coordinates, else the nearest cloud point).
@@ -433,30 +611,24 @@ class Sdf final : public Problem {
     Eigen::MatrixXd n(x.rows(), 3);
     for (Eigen::Index p = 0; p < x.rows(); ++p) {
       const Eigen::RowVector3d row = x.row(p);
-      const auto it = index_.find(key_of(row.data()));
+      const auto it = shape_->index.find(key_of(row.data()));
       Eigen::Index best = 0;
-      if (it != index_.end()) {
+      if (it != shape_->index.end()) {
         best = it->second;
       } else {
-        (points_.rowwise() - row).rowwise().squaredNorm().minCoeff(&best);
+        (shape_->points.rowwise() - row).rowwise().squaredNorm().minCoeff(&best);
       }
-      n.row(p) = normals_.row(best);
+      n.row(p) = shape_->normals.row(best);
     }
     return n;
   }
 
   Domain domain_;
-  Eigen::MatrixXd points_, normals_;  // in domain coordinates
-  std::unordered_map<PointKey, Eigen::Index, PointKeyHash> index_;
-  bool normalize_ = true;
-  double margin_ = 0.1, scale_ = 1;
-  Eigen::Vector3d center_ = Eigen::Vector3d::Zero(), domain_center_ = Eigen::Vector3d::Zero();
-  SdfWeights weights_;
-  double box_weight_ = 0;
-  Eigen::MatrixXd box_points_;  // the face pool, domain coordinates
-  Eigen::VectorXd box_distances_;
-  std::unordered_map<PointKey, Eigen::Index, PointKeyHash> box_index_;
-  std::shared_ptr<io::TriangleMesh> reference_;
+  SdfSettings settings_;
+  std::shared_ptr<const SdfShape> shape_;  // this problem's shape (a family's first training one)
+  std::vector<std::shared_ptr<const SdfShape>> family_;  // equation.family: training shapes, then held-out
+  std::vector<std::string> family_names_;
+  std::size_t training_count_ = 0;
 };
 
 }  // namespace

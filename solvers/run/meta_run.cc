@@ -20,35 +20,12 @@
 #include "solvers/training/progress_printer.h"
 #include "solvers/training/reptile.h"
 #include "solvers/run/run_metrics.h"
+#include "solvers/run/stop_signal.h"
 
 namespace nfield::solvers {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::atomic<int> g_meta_signal{0};
-extern "C" void on_meta_signal(int signal) { g_meta_signal.store(signal); }
-
-// Ctrl-C and SIGTERM end the outer loop cleanly; a second Ctrl-C kills as usual.
-class MetaSignalGuard {
- public:
-  MetaSignalGuard() {
-    g_meta_signal.store(0);
-    struct sigaction action {};
-    action.sa_handler = on_meta_signal;
-    action.sa_flags = SA_RESETHAND;
-    sigemptyset(&action.sa_mask);
-    sigaction(SIGINT, &action, &old_int_);
-    sigaction(SIGTERM, &action, &old_term_);
-  }
-  ~MetaSignalGuard() {
-    sigaction(SIGINT, &old_int_, nullptr);
-    sigaction(SIGTERM, &old_term_, nullptr);
-  }
-
- private:
-  struct sigaction old_int_ {}, old_term_ {};
-};
 
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
@@ -229,13 +206,13 @@ int meta_train_and_write(RunSetup& setup) {
   const auto started = std::chrono::steady_clock::now();
   ReptileResult result;
   {
-    MetaSignalGuard guard;
+    StopSignalGuard guard;
     ProgressPrinterOptions printing;
     printing.log_every = setup.training.log_every;
     printing.terminal = setup.live_progress;
     ProgressPrinter printer(printing);
     ReptileCallbacks callbacks;
-    callbacks.stop_requested = [] { return g_meta_signal.load() != 0; };
+    callbacks.stop_requested = [] { return StopSignalGuard::stop_requested(); };
     callbacks.progress = [&printer](const Progress& p) { printer.step(p); };
     result = run_reptile(tasks, field, setup.training, meta, callbacks);
     printer.finish();
@@ -291,10 +268,11 @@ void check_meta(const RunSetup& s) {
   const io::ConfigNode training = s.root.child_or_empty("training");
   const bool family = !instances(*s.problem, false).empty();
   if (!s.training.meta.enabled) {
-    if (family)
+    if (family && s.field.latent_size == 0)
       throw s.root.child("equation").error(
-          "family", "a family of instances is trained by training.meta (solvers/training/reptile.h); add "
-                    "training.meta, or fit one signal with equation.path");
+          "family", "a family of instances is trained by training.meta (a learned initialisation, "
+                    "solvers/training/reptile.h) or with a latent code per instance (field.latent: {size: N}, "
+                    "solvers/training/auto_decoder.h); add one, or fit one signal with equation.path");
     return;
   }
   const io::ConfigNode meta = training.child("meta");

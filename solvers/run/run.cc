@@ -31,35 +31,13 @@
 #include "solvers/training/progress_printer.h"
 #include "solvers/training/trainer.h"
 #include "solvers/run/field_setup.h"
+#include "solvers/run/latent_run.h"
 #include "solvers/run/meta_run.h"
+#include "solvers/run/stop_signal.h"
 #include "solvers/run/run_metrics.h"
 
 namespace nfield::solvers {
 namespace {
-
-std::atomic<int> g_signal{0};
-extern "C" void on_signal(int signal) { g_signal.store(signal); }
-
-// Ctrl-C and SIGTERM end training cleanly; a second Ctrl-C kills as usual.
-class SignalGuard {
- public:
-  SignalGuard() {
-    g_signal.store(0);
-    struct sigaction action {};
-    action.sa_handler = on_signal;
-    action.sa_flags = SA_RESETHAND;
-    sigemptyset(&action.sa_mask);
-    sigaction(SIGINT, &action, &old_int_);
-    sigaction(SIGTERM, &action, &old_term_);
-  }
-  ~SignalGuard() {
-    sigaction(SIGINT, &old_int_, nullptr);
-    sigaction(SIGTERM, &old_term_, nullptr);
-  }
-
- private:
-  struct sigaction old_int_ {}, old_term_ {};
-};
 
 OutputOptions output_options(const io::ConfigNode& node, const Domain& domain,
                              const std::filesystem::path& config,
@@ -245,13 +223,13 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
   const auto started = std::chrono::steady_clock::now();
   bool finished;
   {
-    SignalGuard guard;
+    StopSignalGuard guard;
     ProgressPrinterOptions printing;
     printing.log_every = setup.training.log_every;
     printing.terminal = setup.live_progress;
     ProgressPrinter printer(printing);
     typename Trainer<Scalar>::Callbacks callbacks;
-    callbacks.stop_requested = [] { return g_signal.load() != 0; };
+    callbacks.stop_requested = [] { return StopSignalGuard::stop_requested(); };
     if (auto* sampling = capability<SamplesWithSolution>(*setup.problem))
       callbacks.before_draw = [sampling, &solution](long step, Random& rng) { sampling->before_step(step, solution, rng); };
     if (!root) {
@@ -430,6 +408,7 @@ RunSetup setup_run(io::ConfigNode root, const std::filesystem::path& config,
   fit_field_to_run(s);  // the encoding: input variances, domain box, stages
   check_field_streams(s);
   s.init = read_field_init(s.root.child_or_empty("field"), s.field, s.data_dir);
+  check_latent(s);
   check_meta(s);
   s.output = output_options(s.root.child_or_empty("output"), s.problem->domain(), config,
                             out_dir_override);
@@ -457,6 +436,7 @@ RunSetup load_run(const std::filesystem::path& config, const std::vector<std::st
 
 int execute_run(RunSetup& setup, const std::filesystem::path& resume) {
   if (setup.training.meta.enabled) return execute_meta_run(setup, resume);
+  if (is_latent_run(setup)) return execute_latent_run(setup, resume);
   return setup.training.precision == "double" ? train_and_write<double>(setup, resume)
                                               : train_and_write<float>(setup, resume);
 }
@@ -508,6 +488,10 @@ nlohmann::ordered_json evaluate_checkpoint(const std::filesystem::path& checkpoi
                                            const std::filesystem::path& out_dir) {
   const io::H5Reader file(checkpoint);
   RunSetup setup = checkpoint_run(file, out_dir);
+  if (is_latent_run(setup))
+    throw std::runtime_error(checkpoint.string() + ": the field and latent codes of a family (field.latent); its "
+                                "outputs per instance are in its run's training/ and held_out/ folders, and "
+                                "`nfield fit-code` fits codes to new signals");
   setup.output.grid.assign(setup.problem->domain().space_dim(), grid_points);
   const fields::Field<double> field = fields::load_field<double>(file);
   if (!setup.problem->writes_grid_outputs())

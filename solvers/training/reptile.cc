@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "solvers/training/adam.h"
+#include "solvers/training/epoch_draws.h"
 #include "solvers/sampling/random.h"
 #include "solvers/training/trainer.h"
 
@@ -52,14 +53,9 @@ ReptileResult run_reptile(const std::vector<ProblemInstance>& tasks, fields::Fie
   meta.validate();
   using Clock = std::chrono::steady_clock;
   const auto started = Clock::now();
-  Random rng(training.seed ^ 0x9E3779B97F4A7C15ull);
+  EpochDraws draws(tasks.size(), training.seed ^ 0x9E3779B97F4A7C15ull);
   autodiff::Vector<Scalar> theta = field.parameters(), sum(theta.size());
   ReptileResult result;
-  // Draws without replacement: the instances in a shuffled order, shuffled again when all
-  // have been drawn, so that every instance weighs the same over an epoch.
-  std::vector<std::size_t> order(tasks.size());
-  std::iota(order.begin(), order.end(), std::size_t{0});
-  std::size_t next = order.size();
   for (int step = 0; step < meta.steps; ++step) {
     if (callbacks.stop_requested && callbacks.stop_requested()) {
       field.parameters() = theta;
@@ -68,11 +64,7 @@ ReptileResult run_reptile(const std::vector<ProblemInstance>& tasks, fields::Fie
     sum.setZero();
     double first = 0, last = 0;
     for (int b = 0; b < meta.tasks_per_step; ++b) {
-      if (next == order.size()) {
-        std::shuffle(order.begin(), order.end(), rng);
-        next = 0;
-      }
-      const std::size_t k = order[next++];
+      const std::size_t k = draws.next();
       field.parameters() = theta;
       // A seed per draw: each adaptation draws its own points (all pixels: the same ones).
       const std::uint64_t seed = training.seed + 1 + static_cast<std::uint64_t>(step) * meta.tasks_per_step + b;

@@ -50,6 +50,7 @@ TrainingOptions TrainingOptions::from_config(const io::ConfigNode& node) {
     o.strategies.push_back(std::move(strategy));
   }
   o.meta = meta_from_config(node);
+  o.auto_decoder = auto_decoder_from_config(node);
   if (node.has("stages")) {
     const io::ConfigNode stages = node.child("stages");
     stages.require(stages.is_sequence() && stages.size() > 0, "expected a non-empty list of stages");
@@ -97,6 +98,7 @@ YAML::Node TrainingOptions::to_yaml() const {
   std::sort(sorted.begin(), sorted.end());
   for (const auto& [key, strategy] : sorted) strategy->write(n);
   write_yaml(n, meta);
+  write_yaml(n, auto_decoder);
   return n;
 }
 

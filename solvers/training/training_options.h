@@ -20,6 +20,7 @@
 //                                  # (the training strategies: each reads its own key,
 //                                  #  solvers/training/strategy_settings.h)
 //     meta: {algorithm: reptile, steps: 1000, inner_steps: 2, …}  # solvers/training/reptile.h
+//     auto_decoder: {instances_per_step: 8, prior: 1.0e-4, …}      # solvers/training/auto_decoder.h
 //     stages:
 //       - {optimizer: adam, steps: 2000, lr: 1.0e-3, schedule: cosine, lr_final: 1.0e-5}
 //       - {optimizer: lbfgs, steps: 500, memory: 20, resample_every: 0}
@@ -44,6 +45,7 @@
 #include <vector>
 
 #include "io/config.h"
+#include "solvers/training/auto_decoder_options.h"
 #include "solvers/training/meta_options.h"
 #include "solvers/training/optimizer.h"
 #include "solvers/training/strategy_settings.h"
@@ -91,6 +93,7 @@ struct TrainingOptions {
   std::vector<std::shared_ptr<const StrategySettings>> strategies;
   // Meta-learning over a family of instances (solvers/training/reptile.h); off by default.
   MetaOptions meta;
+  AutoDecoderOptions auto_decoder;
 
   int total_steps() const;
   // Whether any strategy is on.

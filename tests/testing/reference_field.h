@@ -249,9 +249,14 @@ class ReferenceField {
         count += static_cast<Eigen::Index>(acorn_widths_[l]) * (acorn_widths_[l - 1] + 1);
       table_count_ = count;
     }
-    for (int h : options_.hidden) {
+    for (size_t l = 0; l < options_.hidden.size(); ++l) {
+      const int h = options_.hidden[l];
       count += h * width + h;
       width = h;
+      if (l == 0) {  // a latent code joins the first hidden layer's output (fields/latent_code.h)
+        count += options_.latent_size;
+        width += options_.latent_size;
+      }
     }
     count += options_.output_dim * width + options_.output_dim;
     if (count != parameters_.size())
@@ -422,6 +427,10 @@ class ReferenceField {
         zr = known ? y : apply_tables<T>(*tables_[l], zr);
       }
       a = std::move(z);
+      if (l == 0) {  // the latent code: constants of the parameters
+        for (int j = 0; j < options_.latent_size; ++j) a.push_back(constant<T>(p[j]));
+        p += options_.latent_size;
+      }
     }
     return dense(a, options_.output_dim);
   }

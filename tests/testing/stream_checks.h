@@ -273,9 +273,11 @@ struct NetworkCase {
   std::string activation;  // mlp's activation ("sine" for siren)
   std::string encoding;
   std::string variant = {};  // hash_grid: the interpolation, empty for smoothstep
+  bool latent = false;       // a latent code of 3 joins the first hidden layer (fields/latent_code.h)
   std::string name() const {
     std::string s = type == "siren" ? "siren_" + encoding : type + "_" + activation + "_" + encoding;
     if (!variant.empty()) s += "_" + variant;
+    if (latent) s += "_latent";
     for (char& c : s)
       if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
     return s;
@@ -293,6 +295,10 @@ inline std::vector<NetworkCase> registered_network_cases() {
         cases.push_back({"mlp", activation, encoding, variant});
     }
   }
+  // Latent codes, on a plain SIREN and behind two kinds of encoding.
+  cases.push_back({"siren", "sine", "identity", "", true});
+  cases.push_back({"mlp", "tanh", "positional", "", true});
+  cases.push_back({"mlp", "relu", "hash_grid", "", true});
   // BACON reads the coordinates itself: identity only; its finest head, and its coarse one.
   cases.push_back({"bacon", "sine", "identity"});
   cases.push_back({"bacon", "sine", "identity", "coarse"});
@@ -358,6 +364,7 @@ inline fields::FieldOptions small_options(const NetworkCase& c, int input_dim, i
   o.encoding.lower.assign(coordinates, -1.0);
   o.encoding.upper.assign(coordinates, 1.0);
   o.seed = seed;
+  if (c.latent) o.latent_size = 3;
   if (c.type == "bacon") {
     // Two scales on the box [−1, 1]^d (D = 2): 2 and 5 lattice steps, |ω| ≤ 5π per axis.
     fields::BaconOptions b;

@@ -22,6 +22,7 @@
 #include "io/vtk_polydata.h"
 #include "solvers/run/run.h"
 #include "tests/testing/scratch.h"
+#include "tests/testing/sphere_mesh.h"
 
 namespace nfield::solvers {
 namespace {
@@ -56,35 +57,6 @@ std::filesystem::path write_sphere_cloud(const std::string& name, int n, double 
     out << p(0) << ' ' << p(1) << ' ' << p(2) << ' ' << normal(0) << ' ' << normal(1) << ' ' << normal(2) << '\n';
   }
   return path;
-}
-
-// A latitude–longitude triangulation of the sphere |x| = r, outward winding.
-io::TriangleMesh sphere_mesh(double r, int rings = 48, int segments = 96) {
-  io::TriangleMesh mesh;
-  const int n = 2 + (rings - 1) * segments;
-  mesh.vertices.resize(n, 3);
-  mesh.vertices.row(0) << 0, 0, r;
-  mesh.vertices.row(n - 1) << 0, 0, -r;
-  for (int i = 1; i < rings; ++i)
-    for (int j = 0; j < segments; ++j) {
-      const double theta = kPi * i / rings, phi = 2 * kPi * j / segments;
-      mesh.vertices.row(1 + (i - 1) * segments + j) << r * std::sin(theta) * std::cos(phi),
-          r * std::sin(theta) * std::sin(phi), r * std::cos(theta);
-    }
-  std::vector<Eigen::Vector3i> tris;
-  auto at = [&](int i, int j) { return 1 + (i - 1) * segments + (j % segments); };
-  for (int j = 0; j < segments; ++j) {
-    tris.emplace_back(0, at(1, j), at(1, j + 1));
-    tris.emplace_back(n - 1, at(rings - 1, j + 1), at(rings - 1, j));
-  }
-  for (int i = 1; i + 1 < rings; ++i)
-    for (int j = 0; j < segments; ++j) {
-      tris.emplace_back(at(i, j), at(i + 1, j), at(i + 1, j + 1));
-      tris.emplace_back(at(i, j), at(i + 1, j + 1), at(i, j + 1));
-    }
-  mesh.triangles.resize(static_cast<Eigen::Index>(tris.size()), 3);
-  for (size_t k = 0; k < tris.size(); ++k) mesh.triangles.row(static_cast<Eigen::Index>(k)) = tris[k].transpose();
-  return mesh;
 }
 
 std::string sphere_config(const std::filesystem::path& cloud, const std::string& extra = "") {
@@ -255,7 +227,7 @@ TEST(Sdf, SphereCloudGivesASphere) {
   std::filesystem::remove_all(out);
   const Eigen::Vector3d center(3, -2, 1);
   const double radius = 5;
-  io::TriangleMesh reference = sphere_mesh(radius);
+  io::TriangleMesh reference = testutil::sphere_mesh(radius);
   reference.vertices.rowwise() += center.transpose();
   io::write_ply(test_dir() / "sphere_reference.ply", reference);
   write_sphere_cloud("sphere_train", 2000, radius, center);
@@ -320,7 +292,7 @@ TEST(Sdf, MultiscaleFieldWritesEveryScale) {
   const std::filesystem::path out = test_dir() / "sphere_bacon_out";
   std::filesystem::remove_all(out);
   const double radius = 5;
-  io::write_ply(test_dir() / "sphere_bacon_reference.ply", sphere_mesh(radius));
+  io::write_ply(test_dir() / "sphere_bacon_reference.ply", testutil::sphere_mesh(radius));
   write_sphere_cloud("sphere_bacon", 2000, radius);
   RunSetup setup = load_run(write_config("sphere_bacon", R"(
 problem: sdf

@@ -153,7 +153,7 @@ TEST(Reptile, HeldOutNamesAndCountsAreChecked) {
   expect_located_error(family_config("{images: p, held_out: 3}", kMeta),
                        {4, 33, "equation.family.held_out", "expected"});
   expect_located_error(family_config("{images: p, held_out: [g0.png, g1.png, g2.png]}", kMeta),
-                       {4, 33, "equation.family.held_out", "at least one picture left for training"});
+                       {4, 33, "equation.family.held_out", "at least one of the pictures left for training"});
 }
 
 TEST(Reptile, MetaKeysAreLocated) {
