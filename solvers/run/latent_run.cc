@@ -17,10 +17,10 @@
 #include "io/version.h"
 #include "solvers/core/problem_capabilities.h"
 #include "solvers/core/solution.h"
+#include "solvers/run/instance_outputs.h"
 #include "solvers/run/run_metrics.h"
-#include "solvers/run/stop_signal.h"
+#include "solvers/run/run_progress.h"
 #include "solvers/training/auto_decoder.h"
-#include "solvers/training/progress_printer.h"
 
 namespace nfield::solvers {
 namespace {
@@ -31,45 +31,11 @@ std::string stem_of(const std::string& name) { return fs::path(name).stem().stri
 
 using Metrics = std::vector<std::pair<std::string, double>>;
 
-// What a family's instance reports and writes, with the field's current parameters (a family's
-// instances have no hard conditions: the solution is the network itself).
-template <typename Scalar>
-class InstanceOutputs {
- public:
-  InstanceOutputs(const RunSetup& setup, const fields::Field<Scalar>& field) : setup_(setup), field_(field) {}
-
-  // The instance's first progress figure (fit: PSNR) as (lower-case name, value); nullopt for
-  // problems without progress figures (sdf: its figures come from its outputs).
-  std::optional<std::pair<std::string, double>> figure(const Problem& problem) const {
-    const auto* reports = capability<ReportsProgress>(problem);
-    if (!reports) return std::nullopt;
-    const auto figures = reports->progress_metrics(context({}), {});
-    if (figures.empty()) return std::nullopt;
-    return std::make_pair(io::to_lower(figures.front().first), figures.front().second);
-  }
-  // Writes the instance's outputs into `dir`; returns its metrics.
-  Metrics write(const Problem& problem, const fs::path& dir) const {
-    fs::create_directories(dir);
-    Metrics metrics;
-    problem.write_outputs(context(dir), metrics);
-    return metrics;
-  }
-
- private:
-  OutputContext context(const fs::path& dir) const {
-    const Solution solution = make_solution(field_, nullptr);
-    OutputContext context;
-    context.dir = dir;
-    context.values = solution.values;
-    context.streams = solution.streams;
-    context.grid = setup_.output.grid;
-    context.epsilon = std::numeric_limits<Scalar>::epsilon();
-    return context;
-  }
-
-  const RunSetup& setup_;
-  const fields::Field<Scalar>& field_;
-};
+// An instance's progress figure under a metrics.json key: lower case (psnr).
+std::optional<std::pair<std::string, double>> as_key(std::optional<std::pair<std::string, double>> figure) {
+  if (figure) figure->first = io::to_lower(figure->first);
+  return figure;
+}
 
 template <typename Scalar>
 void write_latent_checkpoint(const fs::path& path, const fields::Field<Scalar>& field, const LatentCodes& codes,
@@ -173,20 +139,20 @@ template <typename Scalar>
 std::vector<InstanceResult> fit_instances(const std::vector<Target>& targets, fields::Field<Scalar>& field,
                                           const autodiff::Vector<Scalar>& start, const RunSetup& setup, int steps,
                                           double lr, bool fine_tune, const fs::path& dir) {
-  const InstanceOutputs<Scalar> outputs(setup, field);
+  const InstanceOutputs<Scalar> outputs(setup.output.grid, field);
   std::vector<InstanceResult> results;
   for (std::size_t k = 0; k < targets.size(); ++k) {
     const Problem& problem = *targets[k].problem;
     field.parameters() = start;
     InstanceResult r;
     r.name = targets[k].name;
-    r.zero_code = outputs.figure(problem);
+    r.zero_code = as_key(outputs.figure(problem));
     const auto losses = fit_code(problem, field, setup.training, steps, lr, fine_tune,
                                  setup.training.seed + 104729 * (k + 1));
     r.final_loss = losses.empty() ? 0.0 : losses.back();
     r.code = code_of(field);
     r.metrics = outputs.write(problem, dir / stem_of(r.name));
-    const auto after = outputs.figure(problem);
+    const auto after = as_key(outputs.figure(problem));
     if (r.zero_code && after)
       std::printf("  %s: %s %.4g with code 0 -> %.4g after %d steps (loss %.3e)\n", r.name.c_str(),
                   after->first.c_str(), r.zero_code->second, after->second, steps, r.final_loss);
@@ -211,7 +177,7 @@ template <typename Scalar>
 void write_interpolation(const std::vector<ProblemInstance>& tasks, fields::Field<Scalar>& field,
                          const LatentCodes& codes, const RunSetup& setup, const fs::path& dir, int steps) {
   if (tasks.size() < 2 || steps < 2) return;
-  const InstanceOutputs<Scalar> outputs(setup, field);
+  const InstanceOutputs<Scalar> outputs(setup.output.grid, field);
   io::PvdCollection pvd(dir / "interpolation.pvd");
   for (int s = 0; s < steps; ++s) {
     const double t = static_cast<double>(s) / (steps - 1);
@@ -242,19 +208,9 @@ int latent_train_and_write(RunSetup& setup) {
   std::printf("auto-decoder over %zu training instances, %zu held out: %d adam steps of %d instances, codes of %d\n",
               tasks.size(), held_out.size(), stage.steps, options.instances_per_step, field.latent_size());
   const auto started = std::chrono::steady_clock::now();
-  AutoDecoderResult result;
-  {
-    StopSignalGuard guard;
-    ProgressPrinterOptions printing;
-    printing.log_every = setup.training.log_every;
-    printing.terminal = setup.live_progress;
-    ProgressPrinter printer(printing);
-    AutoDecoderCallbacks callbacks;
-    callbacks.stop_requested = [] { return StopSignalGuard::stop_requested(); };
-    callbacks.progress = [&printer](const Progress& p) { printer.step(p); };
-    result = train_auto_decoder(tasks, field, codes, setup.training, callbacks);
-    printer.finish();
-  }
+  const AutoDecoderResult result = train_with_progress(setup, [&](const auto& stop_requested, const auto& progress) {
+    return train_auto_decoder(tasks, field, codes, setup.training, {stop_requested, progress});
+  });
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   if (!result.finished) std::printf("\ninterrupted at step %ld: writing the field and codes reached\n", result.steps);
   std::vector<std::string> names;
@@ -274,7 +230,7 @@ int latent_train_and_write(RunSetup& setup) {
   metrics["prior_loss"] = result.prior_loss;
   metrics["precision"] = setup.training.precision;
   metrics["parameters"] = field.parameter_count();
-  const InstanceOutputs<Scalar> outputs(setup, field);
+  const InstanceOutputs<Scalar> outputs(setup.output.grid, field);
   std::vector<InstanceResult> training;
   for (std::size_t k = 0; k < tasks.size(); ++k) {
     set_code(field, codes.row(static_cast<Eigen::Index>(k)).transpose());

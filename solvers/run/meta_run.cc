@@ -19,8 +19,9 @@
 #include "solvers/training/optimizers.h"
 #include "solvers/training/progress_printer.h"
 #include "solvers/training/reptile.h"
+#include "solvers/run/instance_outputs.h"
 #include "solvers/run/run_metrics.h"
-#include "solvers/run/stop_signal.h"
+#include "solvers/run/run_progress.h"
 
 namespace nfield::solvers {
 namespace {
@@ -58,13 +59,11 @@ class HeldOutEvaluation {
     const fs::path folder = dir_ / "held_out" / stem_of(instance.name);
     const int last = std::max(meta.curve_steps, meta.inner_steps);
     const auto record = [&](std::vector<double>& curve, const std::string& label, int step, bool snapshot) {
-      const auto* reports = capability<ReportsProgress>(problem);
-      const auto figures = reports ? reports->progress_metrics(context(folder / (label + "_" + std::to_string(step))), {})
-                                   : std::vector<std::pair<std::string, double>>{};
-      if (figures.empty()) throw std::runtime_error("held-out instance " + instance.name + " reports no figure");
-      c.figure = figures.front().first;
-      curve.push_back(figures.front().second);
-      if (snapshot) write_snapshot(problem, folder / (label + "_" + std::to_string(step)));
+      const auto figure = outputs_.figure(problem);
+      if (!figure) throw std::runtime_error("held-out instance " + instance.name + " reports no figure");
+      c.figure = figure->first;
+      curve.push_back(figure->second);
+      if (snapshot) (void)outputs_.write(problem, folder / (label + "_" + std::to_string(step)));
     };
     const auto snapshot_at = [&](int step) { return step == 0 || step == meta.inner_steps || step == meta.curve_steps; };
     field_.parameters() = meta_theta;
@@ -79,34 +78,17 @@ class HeldOutEvaluation {
       record(c.standard, "standard", s, snapshot_at(s));
       if (c.steps_to_match < 0 && c.standard.back() >= target) {
         c.steps_to_match = s;
-        write_snapshot(problem, folder / "standard_match");
+        (void)outputs_.write(problem, folder / "standard_match");
       }
     });
     return c;
   }
 
  private:
-  // A family's instances have no hard conditions: the solution is the network itself.
-  OutputContext context(const fs::path& dir) const {
-    const Solution solution = make_solution(field_, nullptr);
-    OutputContext context;
-    context.dir = dir;
-    context.values = solution.values;
-    context.streams = solution.streams;
-    context.grid = setup_.output.grid;
-    context.epsilon = std::numeric_limits<Scalar>::epsilon();
-    return context;
-  }
-
-  void write_snapshot(const Problem& problem, const fs::path& dir) const {
-    fs::create_directories(dir);
-    std::vector<std::pair<std::string, double>> ignored;
-    problem.write_outputs(context(dir), ignored);
-  }
-
   const RunSetup& setup_;
   fields::Field<Scalar>& field_;
   fs::path dir_;
+  InstanceOutputs<Scalar> outputs_{setup_.output.grid, field_};
 };
 
 void write_curves(const fs::path& path, const std::vector<HeldOutCurves>& curves) {
@@ -204,19 +186,9 @@ int meta_train_and_write(RunSetup& setup) {
               meta.algorithm.c_str(), tasks.size(), held_out.size(), meta.steps, meta.tasks_per_step,
               meta.inner_steps, meta.inner_optimizer.c_str());
   const auto started = std::chrono::steady_clock::now();
-  ReptileResult result;
-  {
-    StopSignalGuard guard;
-    ProgressPrinterOptions printing;
-    printing.log_every = setup.training.log_every;
-    printing.terminal = setup.live_progress;
-    ProgressPrinter printer(printing);
-    ReptileCallbacks callbacks;
-    callbacks.stop_requested = [] { return StopSignalGuard::stop_requested(); };
-    callbacks.progress = [&printer](const Progress& p) { printer.step(p); };
-    result = run_reptile(tasks, field, setup.training, meta, callbacks);
-    printer.finish();
-  }
+  const ReptileResult result = train_with_progress(setup, [&](const auto& stop_requested, const auto& progress) {
+    return run_reptile(tasks, field, setup.training, meta, {stop_requested, progress});
+  });
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   if (!result.finished) std::printf("\ninterrupted at outer step %ld: writing the initialisation reached\n", result.steps);
   write_meta_checkpoint(dir / "checkpoint.h5", field, setup, config_text);
