@@ -20,6 +20,10 @@
 
 namespace nfield::solvers {
 
+// The folder name of an instance's outputs: its name without the extension (camera_5.png →
+// camera_5).
+inline std::string instance_stem(const std::string& name) { return std::filesystem::path(name).stem().string(); }
+
 template <typename Scalar>
 class InstanceOutputs {
  public:

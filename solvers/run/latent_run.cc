@@ -27,8 +27,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string stem_of(const std::string& name) { return fs::path(name).stem().string(); }
-
 using Metrics = std::vector<std::pair<std::string, double>>;
 
 // An instance's progress figure under a metrics.json key: lower case (psnr).
@@ -151,7 +149,7 @@ std::vector<InstanceResult> fit_instances(const std::vector<Target>& targets, fi
                                  setup.training.seed + 104729 * (k + 1));
     r.final_loss = losses.empty() ? 0.0 : losses.back();
     r.code = code_of(field);
-    r.metrics = outputs.write(problem, dir / stem_of(r.name));
+    r.metrics = outputs.write(problem, dir / instance_stem(r.name));
     const auto after = as_key(outputs.figure(problem));
     if (r.zero_code && after)
       std::printf("  %s: %s %.4g with code 0 -> %.4g after %d steps (loss %.3e)\n", r.name.c_str(),
@@ -234,7 +232,7 @@ int latent_train_and_write(RunSetup& setup) {
   std::vector<InstanceResult> training;
   for (std::size_t k = 0; k < tasks.size(); ++k) {
     set_code(field, codes.row(static_cast<Eigen::Index>(k)).transpose());
-    training.push_back({tasks[k].name, outputs.write(*tasks[k].problem, dir / "training" / stem_of(tasks[k].name))});
+    training.push_back({tasks[k].name, outputs.write(*tasks[k].problem, dir / "training" / instance_stem(tasks[k].name))});
   }
   metrics["training_summary"] = summary_json(training);
   print_summary("training instances with their codes", metrics["training_summary"], headline(training));

@@ -33,8 +33,6 @@ double median(std::vector<double> v) {
   return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
 }
 
-std::string stem_of(const std::string& name) { return fs::path(name).stem().string(); }
-
 // A held-out instance's curves: the figure after each step (index 0: before any).
 struct HeldOutCurves {
   std::string name, figure;
@@ -56,7 +54,7 @@ class HeldOutEvaluation {
     const Problem& problem = *instance.problem;
     HeldOutCurves c;
     c.name = instance.name;
-    const fs::path folder = dir_ / "held_out" / stem_of(instance.name);
+    const fs::path folder = dir_ / "held_out" / instance_stem(instance.name);
     const int last = std::max(meta.curve_steps, meta.inner_steps);
     const auto record = [&](std::vector<double>& curve, const std::string& label, int step, bool snapshot) {
       const auto figure = outputs_.figure(problem);
@@ -95,7 +93,7 @@ void write_curves(const fs::path& path, const std::vector<HeldOutCurves>& curves
   io::write_atomically(path, [&](const fs::path& p) {
     std::ofstream out(p);
     out << "step";
-    for (const auto& c : curves) out << ",meta_" << stem_of(c.name) << ",standard_" << stem_of(c.name);
+    for (const auto& c : curves) out << ",meta_" << instance_stem(c.name) << ",standard_" << instance_stem(c.name);
     out << ",meta_mean,standard_mean\n";
     std::size_t rows = 0;
     for (const auto& c : curves) rows = std::max({rows, c.meta.size(), c.standard.size()});
