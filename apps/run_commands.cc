@@ -27,6 +27,7 @@ struct RenderArguments {
   int frames = 36;
   double elevation = 30;
   std::string out;
+  solvers::RenderCode code;
 };
 
 struct FitCodeArguments {
@@ -85,6 +86,42 @@ void add_fit_code_command(CLI::App& app) {
   });
 }
 
+void add_render_command(CLI::App& app) {
+  auto render = std::make_shared<RenderArguments>();
+  CLI::App* render_command = app.add_subcommand(
+      "render", "Render views of a radiance-field checkpoint: the cameras of a transforms.json, or a turntable");
+  render_command->add_option("checkpoint", render->checkpoint, "A checkpoint.h5 from nfield run (problem: nerf)")
+      ->required()
+      ->check(CLI::ExistingFile)
+      ->check(kCheckpointFile);
+  render_command->add_option("--poses", render->poses, "A transforms.json whose frames give the cameras (images, when present, give PSNRs)")
+      ->check(CLI::ExistingFile);
+  render_command->add_option("--frames", render->frames, "Turntable: views around the scene")
+      ->check(CLI::Range(1, 10000))->capture_default_str();
+  render_command->add_option("--elevation", render->elevation, "Turntable: degrees above the horizontal plane")
+      ->check(CLI::Range(-89.0, 89.0))->capture_default_str();
+  render_command->add_option("--out", render->out, "Output folder (default: beside the checkpoint, render/)");
+  render_command->add_option("--code", render->code.from,
+                             "With appearance codes (data.appearance): render with this training image's code "
+                             "(its name, e.g. r_3, or its row)");
+  render_command->add_option("--to", render->code.to, "With --code: blend towards this image's code")
+      ->needs("--code");
+  render_command->add_option("--t", render->code.t, "With --to: the blend, (1 - t)·code + t·to")
+      ->check(CLI::Range(0.0, 1.0))
+      ->needs("--to")
+      ->capture_default_str();
+  render_command->callback([render] {
+    const std::filesystem::path out = render->out.empty()
+                                          ? std::filesystem::path(render->checkpoint).parent_path() / "render"
+                                          : std::filesystem::path(render->out);
+    solvers::RenderRequest request;
+    request.poses = render->poses;
+    request.turntable_frames = render->frames;
+    request.elevation_degrees = render->elevation;
+    solvers::render_checkpoint(render->checkpoint, request, out, render->code);
+  });
+}
+
 }  // namespace
 
 void add_run_commands(CLI::App& app) {
@@ -133,31 +170,7 @@ void add_run_commands(CLI::App& app) {
   });
 
   add_fit_code_command(app);
-
-  auto render = std::make_shared<RenderArguments>();
-  CLI::App* render_command = app.add_subcommand(
-      "render", "Render views of a radiance-field checkpoint: the cameras of a transforms.json, or a turntable");
-  render_command->add_option("checkpoint", render->checkpoint, "A checkpoint.h5 from nfield run (problem: nerf)")
-      ->required()
-      ->check(CLI::ExistingFile)
-      ->check(kCheckpointFile);
-  render_command->add_option("--poses", render->poses, "A transforms.json whose frames give the cameras (images, when present, give PSNRs)")
-      ->check(CLI::ExistingFile);
-  render_command->add_option("--frames", render->frames, "Turntable: views around the scene")
-      ->check(CLI::Range(1, 10000))->capture_default_str();
-  render_command->add_option("--elevation", render->elevation, "Turntable: degrees above the horizontal plane")
-      ->check(CLI::Range(-89.0, 89.0))->capture_default_str();
-  render_command->add_option("--out", render->out, "Output folder (default: beside the checkpoint, render/)");
-  render_command->callback([render] {
-    const std::filesystem::path out = render->out.empty()
-                                          ? std::filesystem::path(render->checkpoint).parent_path() / "render"
-                                          : std::filesystem::path(render->out);
-    solvers::RenderRequest request;
-    request.poses = render->poses;
-    request.turntable_frames = render->frames;
-    request.elevation_degrees = render->elevation;
-    solvers::render_checkpoint(render->checkpoint, request, out);
-  });
+  add_render_command(app);
 }
 
 }  // namespace nfield::apps

@@ -118,8 +118,11 @@ Field<Scalar>::Field(FieldOptions options, autodiff::SequentialOptions evaluatio
   scales_ = type.output_scales(options_);
   output_scale_ = type.output_scale(options_);
   all_scales_ = scales_ > 1 && type.trains_all_scales(options_);
-  for (size_t m = 0; m < network_.modules().size(); ++m)
-    if (dynamic_cast<const LatentCode<Scalar>*>(network_.modules()[m].get())) latent_offset_ = network_.parameter_offset(m);
+  for (size_t m = 0; m < network_.modules().size(); ++m) {
+    const autodiff::Module<Scalar>* module = network_.modules()[m].get();
+    if (const auto* on = dynamic_cast<const autodiff::OnColumns<Scalar>*>(module)) module = &on->inner();
+    if (dynamic_cast<const LatentCode<Scalar>*>(module)) latent_offset_ = network_.parameter_offset(m);
+  }
   parameters_.setZero(network_.parameter_count());
   initialize();
 }

@@ -17,14 +17,16 @@
 //   acorn  adaptive blocks: a coordinate encoder gives each block of a quadtree/octree a
 //          feature grid, a small decoder reads it (fields/acorn.h; keys: fields/acorn_type.cc).
 //
-// `latent_size` c > 0 (`field.latent: {size: c}`, siren and mlp): a latent code z ∈ R^c, one per
+// `latent_size` c > 0 (`field.latent: {size: c}`, siren, mlp and nerf): a latent code z ∈ R^c, one per
 // instance of a family, joins the first hidden layer's output, x → γ(x) → Dense → σ → [· | z]
 // → Dense → … (fields/latent_code.h). Joined there rather than to x itself: a SIREN's first
 // layer draws its weights from U(−1/n, 1/n) with n its fan-in, so codes among its inputs would
 // shrink the frequencies it spans on x; the first hidden layer is SIREN's own encoding of x
 // (a sum of sines), so z joins the encoded coordinates, as DeepSDF joins it to its input. A
 // shift of every hidden layer's activations (FiLM) is the other common choice; concatenation
-// is the default and the only one so far: it adds c·width weights and nothing else.
+// is the default and the only one so far: it adds c·width weights and nothing else. On a
+// nerf field the code joins the colour layers' input instead (fields/radiance_network.h): an
+// appearance code that changes a view's colours, never the geometry.
 //
 // `hidden` lists the H hidden widths: the SIREN reference network of the paper, d → 256,
 // three 256 → 256 layers and 256 → 1, is hidden = [256, 256, 256, 256].

@@ -99,6 +99,7 @@ class NerfType final : public FieldTypeOf<NerfType> {
       reject("direction_frequencies", std::to_string(o.direction_frequencies), "must be in [1, 16]");
   }
   int encoded_inputs(const FieldOptions& o) const override { return reads_variances(o.encoding) ? 6 : 3; }
+  bool takes_latent_code() const override { return true; }  // into the colour layers: an appearance code
   int variance_inputs(const FieldOptions&) const override { return 3; }
   template <typename Scalar>
   static FeatureEncoding<Scalar>* append(const FieldOptions& o, autodiff::Sequential<Scalar>& network) {
@@ -193,7 +194,7 @@ void FieldOptions::validate() const {
     reject("latent.size", std::to_string(latent_size), "must be in [1, 4096]");
   if (latent_size > 0 && !kind.takes_latent_code())
     reject("latent", "{size: " + std::to_string(latent_size) + "}",
-           "field.type " + type + " takes no latent code (siren and mlp do)");
+           "field.type " + type + " takes no latent code (siren, mlp and nerf do)");
   if (latent_size > 0 && !branches.empty())
     reject("latent", "{size: " + std::to_string(latent_size) + "}", "a field with unknown-field branches takes no latent code");
   if (!(first_omega > 0)) reject("first_omega", std::to_string(first_omega), "must be > 0");

@@ -7,6 +7,7 @@
 #include "fields/dense.h"
 #include "fields/encoding_type.h"
 #include "fields/encodings.h"
+#include "fields/latent_code.h"
 #include "fields/positional_encoding.h"
 
 namespace nfield::fields {
@@ -50,8 +51,12 @@ void add_radiance_modules(const FieldOptions& options, autodiff::Sequential<Scal
   auto direction_encoding = make_encoding<Scalar>(direction, 3);
   const Eigen::Index encoded_direction = direction_encoding->output_width();
   add_on<Scalar>(network, std::move(direction_encoding), 1 + features, 1 + features + kCarried);
-  // The colour layers read [f, γ_d(d)] and carry s in column 0.
+  // The colour layers read [f, γ_d(d)] (and an appearance code z) and carry s in column 0.
   width = features + encoded_direction;
+  if (options.latent_size > 0) {
+    add_on<Scalar>(network, std::make_unique<LatentCode<Scalar>>(width, options.latent_size), 1, 1 + width);
+    width += options.latent_size;
+  }
   for (int c : options.color_hidden) {
     add_on<Scalar>(network, std::make_unique<Dense<Scalar>>(width, c), 1, 1 + width);
     add_on<Scalar>(network, std::make_unique<ActivationLayer<Scalar>>(activation, c), 1, 1 + c);

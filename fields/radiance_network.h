@@ -9,7 +9,10 @@
 //   trunk   γ(x) → [Dense → σ] × H             (σ = `activation`, relu by default)
 //   heads   Dense → [s, f]                      raw density s and a feature vector f (width of
 //                                               the last trunk layer): two heads, one product
-//   colour  [f, γ_d(d)] → [Dense → σ] × C → Dense → raw colour (3)
+//   colour  [f, γ_d(d)] → [Dense → σ] × C → Dense → raw colour (3); with a latent code
+//           (FieldOptions::latent_size) [f, γ_d(d), z] (fields/latent_code.h): NeRF in the
+//           Wild's appearance embedding (Martin-Brualla et al. 2021, NeRF-A), which changes
+//           the colour of a view and never its density
 //   output  [s, r, g, b] (4 channels, raw)
 //
 // The direction enters after the trunk and the density never sees it: it is carried past

@@ -225,6 +225,8 @@ ConfigNode::ConfigNode(YAML::Node node, YAML::Mark mark, std::string file, std::
   log_->keys.try_emplace(path_);
 }
 
+ConfigNode ConfigNode::with_yaml(YAML::Node node) const { return ConfigNode(std::move(node), mark_, file_, path_, log_); }
+
 ConfigNode ConfigNode::make_child(const YAML::Node& node, std::string path) const {
   return ConfigNode(node, own_mark(node), file_, std::move(path), log_);
 }

@@ -122,6 +122,9 @@ class ConfigNode {
   // Where the node starts (yaml-cpp's 0-based mark; null for nodes made in code).
   const YAML::Mark& mark() const { return mark_; }
   const YAML::Node& yaml() const { return node_; }
+  // This node's place in its tree over another YAML node (a copy of it edited in code): keys
+  // asked of the result count as asked of this node's tree, for reject_unknown_keys*.
+  ConfigNode with_yaml(YAML::Node node) const;
 
   // ---- keys of a mapping ------------------------------------------------------
   // All of these mark `key` as a valid key of this mapping, present or not.

@@ -131,6 +131,8 @@ class RendersViews {
 struct ProblemInstance {
   std::string name;
   std::unique_ptr<Problem> problem;
+  // A drawn family's values of this instance (solvers/problems/drawn_family.h), for metrics.
+  std::vector<std::pair<std::string, double>> values{};
 };
 
 // A family of instances (equation.family, trained by training.meta:

@@ -8,6 +8,8 @@
 //     train: data/multiview/bunny_blender/transforms_train.json   # NeRF-synthetic layout
 //     test: data/multiview/bunny_blender/transforms_test.json     # optional: test views
 //     background: white          # white | black | random (training rays only; tests: white)
+//     recolour: {scale: [0.8, 1.2], shift: [-0.2, 0.2], seed: 0}   # optional: per image c·s + b
+//     appearance: false          # true: an appearance code per training image (below)
 //   scene:
 //     lower: [-0.6, -0.6, -0.6]  # the box rays are clipped to, where the field lives
 //     upper: [0.6, 0.6, 0.6]
@@ -56,6 +58,18 @@
 // averaged. A field trained on Gaussians has no meaning at σ² = 0 in its damped octaves
 // (fields/integrated_positional.h).
 //
+// Appearance codes (data.appearance, NeRF in the Wild's NeRF-A, Martin-Brualla et al. 2021):
+// the problem is a family (HasInstances) whose instances are the training images, each a
+// problem that draws its own image's rays, trained with field.latent (the code joins the
+// colour layers, fields/radiance_network.h) by the auto-decoder (solvers/run/latent_run.h).
+// The test images are the held-out instances: each draws the rays of its left half only
+// (integrators/dataset_views.h), so the code fitted to it has never seen the right half,
+// where its figure (PSNR) and psnr_right_half_mean score it, as in the paper's synthetic
+// experiments. An instance writes its own view (view/) with that code; the first training
+// instance also writes the density and surface, which no code changes. Needs data.test;
+// refuses an occupancy grid and importance samples (an instance's passes update no grid and
+// hold no field to refine with).
+//
 // Outputs: the density σ on output.grid over the scene box as density.vti, its isosurface
 // σ = render.surface as surface.vtp and surface.ply (VTK flying edges); every test view rendered (midpoint samples), beside its ground truth, the error,
 // depth and opacity, as PNGs in test_views/; PSNR and SSIM per view and their means in
@@ -71,6 +85,7 @@
 
 #include "autodiff/sequential.h"
 #include "integrators/cone_frustums.h"
+#include "integrators/dataset_views.h"
 #include "integrators/multiview_dataset.h"
 #include "integrators/occupancy_grid.h"
 #include "integrators/ray_batch.h"
@@ -183,7 +198,8 @@ class Nerf final : public Problem,
                    public TakesInputVariances,
                    public SamplesWithSolution,
                    public ReportsProgress,
-                   public RendersViews {
+                   public RendersViews,
+                   public HasInstances {
  public:
   explicit Nerf(const ProblemContext& context) : scene_(context), box_(scene_.box()) {
     const io::ConfigNode render = context.root.child_or_empty("render");
@@ -196,6 +212,28 @@ class Nerf final : public Problem,
     render.require("surface", surface_ > 0 && std::isfinite(surface_), "expected a density > 0");
     if (render.has("occupancy")) read_occupancy(render.child("occupancy"));
     render.reject_unknown_keys();
+    if (scene_.appearance()) check_appearance(context.root, render);
+  }
+
+  // data.appearance: every training image an instance; the test images held out, each
+  // fitted on its left half and scored on its right half. A training instance's outputs are
+  // its own view (the first one's also the density and surface, which no code changes).
+  std::vector<ProblemInstance> instances(bool held_out) const override {
+    std::vector<ProblemInstance> list;
+    if (!scene_.appearance() || instance_) return list;
+    const integrators::MultiviewDataset& views = held_out ? *scene_.test() : scene_.train();
+    const int width = views.intrinsics.width;
+    for (int k = 0; k < static_cast<int>(views.frames.size()); ++k) {
+      auto view = std::make_shared<const integrators::MultiviewDataset>(integrators::single_frame(views, k));
+      auto drawn = held_out ? std::make_shared<const integrators::MultiviewDataset>(
+                                  integrators::frame_columns(views, k, 0, width / 2))
+                            : view;
+      auto instance = std::unique_ptr<Nerf>(new Nerf(*this, scene_.with_views(drawn, view, "view")));
+      instance->scored_from_column_ = held_out ? width / 2 : 0;
+      instance->writes_density_ = !held_out && k == 0;
+      list.push_back({views.frames[static_cast<std::size_t>(k)].path.filename().string(), std::move(instance)});
+    }
+    return list;
   }
 
   const Domain& domain() const override { return scene_.domain(); }
@@ -231,6 +269,8 @@ class Nerf final : public Problem,
 
   std::vector<std::pair<std::string, double>> progress_metrics(
       const OutputContext& context, const TrainingRate& rate) const override {
+    // An instance's figure: the PSNR of its view where it is scored.
+    if (instance_) return {{"PSNR", scene_.columns_psnr(renderer(context, nullptr), scored_from_column_)}};
     const double rays = rate.groups.empty() ? 0.0 : static_cast<double>(rate.groups[0]);
     const double samples = rate.points.empty() ? 0.0 : static_cast<double>(rate.points[0]);
     std::vector<std::pair<std::string, double>> figures{{"rays/s", rate.steps_per_second * rays},
@@ -264,7 +304,7 @@ class Nerf final : public Problem,
 
   void write_outputs(const OutputContext& context,
                      std::vector<std::pair<std::string, double>>& metrics) const override {
-    write_density(context, metrics);
+    if (writes_density_) write_density(context, metrics);
     if (!scene_.test()) return;
     double dense_seconds = 0, dense_psnr_sum = 0;
     std::function<void(int)> dense_view;
@@ -290,6 +330,31 @@ class Nerf final : public Problem,
   }
 
  private:
+  // An instance of the family `family` (data.appearance) that draws and renders `scene`.
+  Nerf(const Nerf& family, RadianceScene scene)
+      : scene_(std::move(scene)),
+        box_(family.box_),
+        samples_(family.samples_),
+        importance_(family.importance_),
+        variances_(family.variances_),
+        point_variance_(family.point_variance_),
+        surface_(family.surface_),
+        density_(family.density_),
+        instance_(true) {}
+
+  // Appearance codes are trained by the auto-decoder, whose passes draw and render with no
+  // grid updates and no field in hand (before_step is not called for an instance).
+  static void check_appearance(const io::ConfigNode& root, const io::ConfigNode& render) {
+    const io::ConfigNode data = root.child("data");
+    if (!root.child_or_empty("field").has("latent"))
+      throw data.error("appearance", "expected field.latent: {size: N} too: the appearance code of each image");
+    if (render.has("occupancy"))
+      throw render.error("occupancy", "not with data.appearance: each image's instance draws stratified samples");
+    if (render.has("importance") && render.get<int>("importance") > 0)
+      throw render.error("importance", "expected 0 with data.appearance: each image's instance draws stratified "
+                                       "samples");
+  }
+
   struct OccupancySettings {
     integrators::OccupancyGridOptions grid;
     integrators::MarchOptions march;
@@ -409,6 +474,9 @@ class Nerf final : public Problem,
   std::unique_ptr<integrators::OccupancyGrid> grid_;  // null: stratified samples
   const Solution* solution_ = nullptr;                // the field in training (before_step)
   bool grid_updated_ = false;                         // since this problem was built
+  bool instance_ = false;                             // one image of an appearance family
+  int scored_from_column_ = 0;                        // an instance's figure: its view's columns from here
+  bool writes_density_ = true;                        // density.vti and the surface in write_outputs
 };
 
 }  // namespace

@@ -4,6 +4,7 @@
 #include <algorithm>
 
 #include "io/text.h"
+#include "solvers/problems/drawn_family.h"
 
 namespace nfield::solvers {
 
@@ -52,6 +53,7 @@ std::unique_ptr<Problem> make_problem(const ProblemContext& context) {
       std::find(kBuiltIn.begin(), kBuiltIn.end(), lower) != kBuiltIn.end())
     throw domain.error("geometry", "problem: " + name + " takes a box domain (lower, upper); shapes "
                                    "(domain.geometry) work with problem: poisson and problem: pde");
+  if (has_drawn_family(context.root)) return make_drawn_family(context, problems().at(name));
   return problems().at(name)(context);
 }
 

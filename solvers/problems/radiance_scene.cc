@@ -1,17 +1,23 @@
 // SPDX-License-Identifier: MIT
 #include "solvers/problems/radiance_scene.h"
 
+#include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <numbers>
+#include <optional>
+#include <stdexcept>
 
 #include <Eigen/Geometry>
 
+#include "integrators/dataset_views.h"
 #include "integrators/multiview_dataset.h"
 #include "integrators/volume_rendering.h"
 #include "io/image_metrics.h"
+#include "io/text.h"
 #include "io/png_image.h"
 
 namespace nfield::solvers {
@@ -49,6 +55,49 @@ integrators::PixelBatch<double> every_other(const integrators::PixelBatch<double
   return some;
 }
 
+// data.recolour: each image's colours scaled and shifted per channel (integrators/dataset_views.h).
+struct RecolourSettings {
+  std::array<double, 2> scale{0.8, 1.2}, shift{-0.2, 0.2};
+  std::uint64_t seed = 0;
+  // Frames of the training set draw from `seed`, the test set's from seed + 1.
+  void apply(integrators::MultiviewDataset& data, std::uint64_t stream) const {
+    integrators::recolour(data, integrators::draw_recolouring(static_cast<int>(data.frames.size()), scale[0], scale[1],
+                                                              shift[0], shift[1], seed + stream));
+  }
+};
+
+RecolourSettings read_recolour(const io::ConfigNode& node) {
+  RecolourSettings r;
+  const auto range = [&](const char* key, std::array<double, 2>& out, double low, double high) {
+    if (!node.has(key)) return;
+    const std::vector<double> v = node.get_list<double>(key, 2);
+    node.require(key, std::isfinite(v[0]) && std::isfinite(v[1]) && v[0] <= v[1] && v[0] >= low && v[1] <= high,
+                 "expected [lower, upper] with " + io::format_number(low) + " <= lower <= upper <= " +
+                     io::format_number(high));
+    out = {v[0], v[1]};
+  };
+  range("scale", r.scale, 0.0, 100.0);
+  range("shift", r.shift, -1.0, 1.0);
+  if (node.has("seed")) r.seed = static_cast<std::uint64_t>(node.get_in_range("seed", 0, 1 << 30));
+  node.reject_unknown_keys();
+  return r;
+}
+
+// Mean squared error over the columns [begin, end) of a view `width` wide.
+double columns_mse(const Eigen::MatrixXf& image, const Eigen::MatrixXf& truth, int width, int begin, int end) {
+  double sum = 0;
+  Eigen::Index n = 0;
+  for (Eigen::Index p = 0; p < image.rows(); ++p) {
+    const int c = static_cast<int>(p % width);
+    if (c < begin || c >= end) continue;
+    sum += (image.row(p) - truth.row(p)).cast<double>().squaredNorm();
+    n += 3;
+  }
+  return n > 0 ? sum / static_cast<double>(n) : 0.0;
+}
+
+double psnr_of_mse(double mse) { return -10 * std::log10(std::max(mse, 1e-20)); }
+
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -79,13 +128,35 @@ RadianceScene::RadianceScene(const ProblemContext& context) : domain_(scene_doma
                                         : Background::kRandom;
   integrators::DatasetOptions dataset;
   dataset.background = background_ == Background::kBlack ? Eigen::Vector3d::Zero() : Eigen::Vector3d::Ones();
-  train_ = std::make_shared<integrators::MultiviewDataset>(read(data, "train", context.config_dir, dataset));
+  integrators::MultiviewDataset train = read(data, "train", context.config_dir, dataset);
+  std::optional<integrators::MultiviewDataset> test;
   if (data.has("test")) {
-    integrators::DatasetOptions test = dataset;
-    if (background_ == Background::kRandom) test.background = Eigen::Vector3d::Ones();
-    test_ = std::make_shared<integrators::MultiviewDataset>(read(data, "test", context.config_dir, test));
+    integrators::DatasetOptions options = dataset;
+    if (background_ == Background::kRandom) options.background = Eigen::Vector3d::Ones();
+    test = read(data, "test", context.config_dir, options);
   }
+  if (data.has("recolour")) {
+    const RecolourSettings recolour = read_recolour(data.child("recolour"));
+    recolour.apply(train, 0);
+    if (test) recolour.apply(*test, 1);
+  }
+  appearance_ = data.get_or("appearance", false);
+  if (appearance_ && !test)
+    throw data.error("appearance", "expected data.test too: its images are the held-out instances, each scored on "
+                                   "its right half after a code is fitted on its left half");
+  train_ = std::make_shared<const integrators::MultiviewDataset>(std::move(train));
+  if (test) test_ = std::make_shared<const integrators::MultiviewDataset>(std::move(*test));
   data.reject_unknown_keys();
+}
+
+RadianceScene RadianceScene::with_views(std::shared_ptr<const integrators::MultiviewDataset> train,
+                                        std::shared_ptr<const integrators::MultiviewDataset> test,
+                                        std::string view_folder) const {
+  RadianceScene scene = *this;
+  scene.train_ = std::move(train);
+  scene.test_ = std::move(test);
+  scene.view_folder_ = std::move(view_folder);
+  return scene;
 }
 
 void RadianceScene::clip(integrators::Rays<double>& rays) const { integrators::clip_to_box(rays, box_, near_); }
@@ -124,6 +195,13 @@ std::vector<std::pair<std::string, double>> RadianceScene::progress_psnr(const R
   if (!test_) return {};
   const View view = render_view(*test_, 0, render, 4);
   return {{"test PSNR", io::psnr(view.rgb, view.truth)}};
+}
+
+double RadianceScene::columns_psnr(const RenderRays& render, int first_column) const {
+  if (!test_) throw std::logic_error("columns_psnr: the scene has no test view");
+  const View view = render_view(*test_, 0, render);
+  const int width = test_->intrinsics.width;
+  return psnr_of_mse(columns_mse(view.rgb, view.truth, width, first_column, width));
 }
 
 void RadianceScene::render_views(const OutputContext& context, const RenderRequest& request,
@@ -171,9 +249,9 @@ double RadianceScene::write_test_views(const OutputContext& context, const Rende
                                        std::vector<std::pair<std::string, double>>& metrics,
                                        const std::function<void(int)>& after_view) const {
   if (!test_) return 0;
-  const std::filesystem::path views = context.dir / "test_views";
+  const std::filesystem::path views = context.dir / view_folder_;
   std::filesystem::create_directories(views);
-  double psnr_sum = 0, ssim_sum = 0, seconds = 0;
+  double psnr_sum = 0, ssim_sum = 0, seconds = 0, left_sum = 0, right_sum = 0;
   const int width = test_->intrinsics.width, height = test_->intrinsics.height;
   for (size_t f = 0; f < test_->frames.size(); ++f) {
     const auto started = std::chrono::steady_clock::now();
@@ -183,6 +261,8 @@ double RadianceScene::write_test_views(const OutputContext& context, const Rende
     const Eigen::MatrixXf& truth = test_->frames[f].rgb;
     const double psnr = io::psnr(view.rgb, truth);
     const double ssim = io::ssim(view.rgb, truth, width, height);
+    left_sum += psnr_of_mse(columns_mse(view.rgb, truth, width, 0, width / 2));
+    right_sum += psnr_of_mse(columns_mse(view.rgb, truth, width, width / 2, width));
     char name[64];
     std::snprintf(name, sizeof name, "test_%03zu", f);
     metrics.emplace_back(std::string("psnr_") + name, psnr);
@@ -194,9 +274,13 @@ double RadianceScene::write_test_views(const OutputContext& context, const Rende
   const auto n = static_cast<double>(test_->frames.size());
   metrics.emplace_back("psnr_mean", psnr_sum / n);
   metrics.emplace_back("ssim_mean", ssim_sum / n);
+  metrics.emplace_back("psnr_left_half_mean", left_sum / n);
+  metrics.emplace_back("psnr_right_half_mean", right_sum / n);
   metrics.emplace_back("render_ms_mean", 1e3 * seconds / n);
-  std::printf("test views: mean PSNR %.2f dB, mean SSIM %.4f over %zu views, %.0f ms a view (%s)\n",
-              psnr_sum / n, ssim_sum / n, test_->frames.size(), 1e3 * seconds / n, views.string().c_str());
+  std::printf("%s: mean PSNR %.2f dB (left halves %.2f, right halves %.2f), mean SSIM %.4f over %zu view%s, %.0f ms "
+              "a view (%s)\n",
+              view_folder_.c_str(), psnr_sum / n, left_sum / n, right_sum / n, ssim_sum / n, test_->frames.size(),
+              test_->frames.size() == 1 ? "" : "s", 1e3 * seconds / n, views.string().c_str());
   return seconds / n;
 }
 

@@ -76,6 +76,13 @@ class RadianceScene {
   Background background() const { return background_; }
   const integrators::MultiviewDataset& train() const { return *train_; }
   const integrators::MultiviewDataset* test() const { return test_.get(); }
+  // data.appearance: each training image an instance with its own appearance code (nerf.cc).
+  bool appearance() const { return appearance_; }
+
+  // This scene with other views: `train` to draw pixels from, `test` (may be null) to render
+  // and score into context.dir/`view_folder`.
+  RadianceScene with_views(std::shared_ptr<const integrators::MultiviewDataset> train,
+                           std::shared_ptr<const integrators::MultiviewDataset> test, std::string view_folder) const;
 
   // `rays` random training pixels (rays clipped); then, after the problem has drawn its
   // samples from the same engine, their targets and backgrounds (random ones drawn here).
@@ -88,13 +95,17 @@ class RadianceScene {
                    int stride = 1) const;
   // The PSNR of the first test view at every 4th pixel (progress lines); none without tests.
   std::vector<std::pair<std::string, double>> progress_psnr(const RenderRays& render) const;
+  // The PSNR of the first test view's columns from `first_column` on, every pixel rendered.
+  double columns_psnr(const RenderRays& render, int first_column) const;
 
   // `nfield render`: the request's cameras rendered into context.dir.
   void render_views(const OutputContext& context, const RenderRequest& request, const RenderRays& render) const;
 
   // Every test view rendered into context.dir/test_views with PSNR and SSIM per view and
-  // their means, and render_ms_mean, added to `metrics`; `after_view(f)`, if given, runs
-  // after view f (untimed). Returns the mean seconds per view (0 without test views).
+  // their means, the mean PSNRs of the views' left and right halves (columns below and from
+  // ⌊width/2⌋: NeRF-W's protocol scores the right halves), and render_ms_mean, added to
+  // `metrics`; `after_view(f)`, if given, runs after view f (untimed). Returns the mean
+  // seconds per view (0 without test views).
   double write_test_views(const OutputContext& context, const RenderRays& render,
                           std::vector<std::pair<std::string, double>>& metrics,
                           const std::function<void(int)>& after_view = {}) const;
@@ -106,6 +117,8 @@ class RadianceScene {
   integrators::SceneBox box_;
   double near_ = 0;
   Background background_ = Background::kWhite;
+  bool appearance_ = false;
+  std::string view_folder_ = "test_views";
   std::shared_ptr<const integrators::MultiviewDataset> train_, test_;
 };
 

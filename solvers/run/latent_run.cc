@@ -30,9 +30,9 @@ namespace fs = std::filesystem;
 using Metrics = std::vector<std::pair<std::string, double>>;
 
 // An instance's progress figure under a metrics.json key: lower case (psnr).
-std::optional<std::pair<std::string, double>> as_key(std::optional<std::pair<std::string, double>> figure) {
-  if (figure) figure->first = io::to_lower(figure->first);
-  return figure;
+std::optional<std::pair<std::string, double>> as_key(const std::optional<InstanceFigure>& figure) {
+  if (!figure) return std::nullopt;
+  return std::pair{io::to_lower(figure->name), figure->value};
 }
 
 template <typename Scalar>
@@ -58,6 +58,7 @@ void write_config_copy(const fs::path& dir, const std::string& config_text) {
 // with the code at 0 (before the fit) and the code.
 struct InstanceResult {
   std::string name;
+  Metrics values;  // a drawn instance's values (solvers/problems/drawn_family.h)
   Metrics metrics;
   std::optional<std::pair<std::string, double>> zero_code;
   double final_loss = 0;
@@ -69,6 +70,7 @@ nlohmann::ordered_json results_json(const std::vector<InstanceResult>& results) 
   for (const auto& r : results) {
     nlohmann::ordered_json item;
     item["name"] = r.name;
+    for (const auto& [key, value] : r.values) item[key] = value;
     if (r.zero_code) item[r.zero_code->first + "_zero_code"] = r.zero_code->second;
     if (r.code.size() > 0) item["final_loss"] = r.final_loss;
     for (const auto& [key, value] : r.metrics) item[key] = value;  // NaN: null
@@ -107,11 +109,12 @@ nlohmann::ordered_json summary_json(const std::vector<InstanceResult>& results) 
 struct Target {
   std::string name;
   const Problem* problem;
+  Metrics values{};
 };
 
 std::vector<Target> targets_of(const std::vector<ProblemInstance>& instances) {
   std::vector<Target> targets;
-  for (const auto& i : instances) targets.push_back({i.name, i.problem.get()});
+  for (const auto& i : instances) targets.push_back({i.name, i.problem.get(), i.values});
   return targets;
 }
 
@@ -122,12 +125,15 @@ void print_summary(const char* what, const nlohmann::ordered_json& summary, cons
               summary[key]["min"].get<double>(), summary[key]["max"].get<double>());
 }
 
-// The metric a summary line shows: psnr_db (fit) or chamfer_mean_per_diagonal (sdf), else the
+// The metric a summary line shows: psnr_db (fit), chamfer_mean_per_diagonal (sdf), or a nerf
+// view's psnr_mean (held out: psnr_right_half_mean, the half its code never saw); else the
 // first one.
-std::string headline(const std::vector<InstanceResult>& results) {
+std::string headline(const std::vector<InstanceResult>& results, bool held_out) {
   if (results.empty() || results.front().metrics.empty()) return {};
-  for (const auto& [key, value] : results.front().metrics)
-    if (key == "psnr_db" || key == "chamfer_mean_per_diagonal") return key;
+  const std::string view_psnr = held_out ? "psnr_right_half_mean" : "psnr_mean";
+  for (const std::string& wanted : {std::string("psnr_db"), std::string("chamfer_mean_per_diagonal"), view_psnr})
+    for (const auto& [key, value] : results.front().metrics)
+      if (key == wanted) return key;
   return results.front().metrics.front().first;
 }
 
@@ -137,16 +143,25 @@ template <typename Scalar>
 std::vector<InstanceResult> fit_instances(const std::vector<Target>& targets, fields::Field<Scalar>& field,
                                           const autodiff::Vector<Scalar>& start, const RunSetup& setup, int steps,
                                           double lr, bool fine_tune, const fs::path& dir) {
-  const InstanceOutputs<Scalar> outputs(setup.output.grid, field);
+  const InstanceOutputs<Scalar> outputs(setup.output, field);
   std::vector<InstanceResult> results;
   for (std::size_t k = 0; k < targets.size(); ++k) {
     const Problem& problem = *targets[k].problem;
     field.parameters() = start;
     InstanceResult r;
     r.name = targets[k].name;
+    r.values = targets[k].values;
     r.zero_code = as_key(outputs.figure(problem));
+    // A progress line at most every 5 s: a fit of hundreds of steps can take tens of seconds.
+    auto last_report = std::chrono::steady_clock::now();
     const auto losses = fit_code(problem, field, setup.training, steps, lr, fine_tune,
-                                 setup.training.seed + 104729 * (k + 1));
+                                 setup.training.seed + 104729 * (k + 1), [&](int s) {
+                                   const auto now = std::chrono::steady_clock::now();
+                                   if (now - last_report < std::chrono::seconds(5)) return;
+                                   last_report = now;
+                                   std::printf("  %s: step %d/%d of its fit\n", r.name.c_str(), s, steps);
+                                   std::fflush(stdout);
+                                 });
     r.final_loss = losses.empty() ? 0.0 : losses.back();
     r.code = code_of(field);
     r.metrics = outputs.write(problem, dir / instance_stem(r.name));
@@ -175,7 +190,7 @@ template <typename Scalar>
 void write_interpolation(const std::vector<ProblemInstance>& tasks, fields::Field<Scalar>& field,
                          const LatentCodes& codes, const RunSetup& setup, const fs::path& dir, int steps) {
   if (tasks.size() < 2 || steps < 2) return;
-  const InstanceOutputs<Scalar> outputs(setup.output.grid, field);
+  const InstanceOutputs<Scalar> outputs(setup.output, field);
   io::PvdCollection pvd(dir / "interpolation.pvd");
   for (int s = 0; s < steps; ++s) {
     const double t = static_cast<double>(s) / (steps - 1);
@@ -228,14 +243,18 @@ int latent_train_and_write(RunSetup& setup) {
   metrics["prior_loss"] = result.prior_loss;
   metrics["precision"] = setup.training.precision;
   metrics["parameters"] = field.parameter_count();
-  const InstanceOutputs<Scalar> outputs(setup.output.grid, field);
+  const InstanceOutputs<Scalar> outputs(setup.output, field);
   std::vector<InstanceResult> training;
   for (std::size_t k = 0; k < tasks.size(); ++k) {
     set_code(field, codes.row(static_cast<Eigen::Index>(k)).transpose());
-    training.push_back({tasks[k].name, outputs.write(*tasks[k].problem, dir / "training" / instance_stem(tasks[k].name))});
+    InstanceResult r;
+    r.name = tasks[k].name;
+    r.values = tasks[k].values;
+    r.metrics = outputs.write(*tasks[k].problem, dir / "training" / instance_stem(tasks[k].name));
+    training.push_back(std::move(r));
   }
   metrics["training_summary"] = summary_json(training);
-  print_summary("training instances with their codes", metrics["training_summary"], headline(training));
+  print_summary("training instances with their codes", metrics["training_summary"], headline(training, false));
   if (!held_out.empty()) {
     std::printf("held-out instances: a code each, %d adam steps at %g with the field frozen\n", options.fit_steps,
                 options.fit_lr);
@@ -243,7 +262,7 @@ int latent_train_and_write(RunSetup& setup) {
                                       false, dir / "held_out");
     metrics["held_out_summary"] = summary_json(fitted);
     metrics["held_out"] = results_json(fitted);
-    print_summary("held-out instances, codes fitted", metrics["held_out_summary"], headline(fitted));
+    print_summary("held-out instances, codes fitted", metrics["held_out_summary"], headline(fitted, true));
   }
   metrics["training"] = results_json(training);
   field.parameters() = trained;
@@ -305,7 +324,7 @@ int fit_codes_with(const fs::path& checkpoint, RunSetup& setup, const FitCodeOpt
   metrics["instances"] = results_json(fitted);
   metrics["nfield_version"] = std::string(version());
   write_metrics_json(dir, metrics);
-  print_summary("codes fitted", metrics["summary"], headline(fitted));
+  print_summary("codes fitted", metrics["summary"], headline(fitted, true));
   std::printf("wrote %s (%.1f s)\n", dir.string().c_str(), wall);
   return 0;
 }

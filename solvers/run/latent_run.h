@@ -10,14 +10,15 @@
 //                       per training instance; attribute names, the instances' names) for
 //                       `nfield fit-code` and h5py
 //   training/NAME/      each training instance's outputs with its code (fit: reconstruction.png,
-//                       error.png)
+//                       error.png; nerf with data.appearance: view/, the image rendered)
 //   held_out/NAME/      each held-out instance's outputs after its code fit
 //   interpolation/S/    the first two training instances' outputs along the line between
 //                       their codes, S = 0 … interpolation_steps − 1, drawn by the first one's
 //                       problem; interpolation.pvd lists their surfaces (sdf) as a series
 //   metrics.json        problem, steps, wall_s, the last step's data and prior losses;
 //                       `training` and `held_out`: per instance the metrics its outputs give
-//                       (fit: psnr, …; sdf: chamfer_mean_per_diagonal, …), held-out ones also
+//                       (fit: psnr, …; sdf: chamfer_mean_per_diagonal, …; nerf: psnr_mean and
+//                       psnr_right_half_mean, the half a held-out code never saw), held-out ones also
 //                       their progress figure with the code at 0 (psnr_zero_code) and the fit's
 //                       final loss; `training_summary` and `held_out_summary`: per metric its
 //                       mean, min, max and count over the instances

@@ -35,9 +35,12 @@ double median(std::vector<double> v) {
 
 // A held-out instance's curves: the figure after each step (index 0: before any).
 struct HeldOutCurves {
-  std::string name, figure;
+  std::string name;
+  InstanceFigure figure;
   std::vector<double> meta, standard;
-  long steps_to_match = -1;  // the standard curve's first step at or above meta[inner_steps]
+  long steps_to_match = -1;  // the standard curve's first step as good as meta[inner_steps]
+  long meta_steps_to_end = -1;  // the meta curve's first step as good as the standard's last
+  std::vector<std::pair<std::string, double>> values;  // a drawn instance's values
 };
 
 template <typename Scalar>
@@ -54,14 +57,16 @@ class HeldOutEvaluation {
     const Problem& problem = *instance.problem;
     HeldOutCurves c;
     c.name = instance.name;
+    c.values = instance.values;
     const fs::path folder = dir_ / "held_out" / instance_stem(instance.name);
     const int last = std::max(meta.curve_steps, meta.inner_steps);
     const auto record = [&](std::vector<double>& curve, const std::string& label, int step, bool snapshot) {
       const auto figure = outputs_.figure(problem);
       if (!figure) throw std::runtime_error("held-out instance " + instance.name + " reports no figure");
-      c.figure = figure->first;
-      curve.push_back(figure->second);
+      c.figure = *figure;
+      curve.push_back(figure->value);
       if (snapshot) (void)outputs_.write(problem, folder / (label + "_" + std::to_string(step)));
+      report(instance.name, label, step, label == "meta" ? last : stage.steps, *figure);
     };
     const auto snapshot_at = [&](int step) { return step == 0 || step == meta.inner_steps || step == meta.curve_steps; };
     field_.parameters() = meta_theta;
@@ -74,19 +79,32 @@ class HeldOutEvaluation {
     const double target = c.meta[static_cast<std::size_t>(meta.inner_steps)];
     adapt(problem, field_, setup_.training, "adam", lr, stage.steps, seed, [&](int s) {
       record(c.standard, "standard", s, snapshot_at(s));
-      if (c.steps_to_match < 0 && c.standard.back() >= target) {
+      if (c.steps_to_match < 0 && c.figure.as_good(c.standard.back(), target)) {
         c.steps_to_match = s;
         (void)outputs_.write(problem, folder / "standard_match");
       }
     });
+    for (std::size_t s = 0; s < c.meta.size() && c.meta_steps_to_end < 0; ++s)
+      if (c.figure.as_good(c.meta[s], c.standard.back())) c.meta_steps_to_end = static_cast<long>(s);
     return c;
   }
 
  private:
+  // A progress line at most every 5 s: a baseline of thousands of steps is minutes long.
+  void report(const std::string& name, const std::string& label, int step, int steps, const InstanceFigure& figure) {
+    const auto now = std::chrono::steady_clock::now();
+    if (now - last_report_ < std::chrono::seconds(5)) return;
+    last_report_ = now;
+    std::printf("  %s, from the %s θ: step %d/%d, %s %.4g\n", name.c_str(), label == "meta" ? "learned" : "standard",
+                step, steps, figure.name.c_str(), figure.value);
+    std::fflush(stdout);
+  }
+
   const RunSetup& setup_;
   fields::Field<Scalar>& field_;
   fs::path dir_;
-  InstanceOutputs<Scalar> outputs_{setup_.output.grid, field_};
+  InstanceOutputs<Scalar> outputs_{setup_.output, field_};
+  std::chrono::steady_clock::time_point last_report_ = std::chrono::steady_clock::now();
 };
 
 void write_curves(const fs::path& path, const std::vector<HeldOutCurves>& curves) {
@@ -122,8 +140,7 @@ void write_curves(const fs::path& path, const std::vector<HeldOutCurves>& curves
 void summarise(nlohmann::ordered_json& metrics, const std::vector<HeldOutCurves>& curves, const MetaOptions& meta,
                int baseline_steps) {
   if (curves.empty()) return;
-  const std::string figure = curves.front().figure;
-  metrics["held_out_figure"] = figure;
+  metrics["held_out_figure"] = curves.front().figure.name;
   for (int s : {0, meta.inner_steps, meta.curve_steps}) {
     double m = 0, st = 0;
     for (const auto& c : curves) {
@@ -144,13 +161,23 @@ void summarise(nlohmann::ordered_json& metrics, const std::vector<HeldOutCurves>
     metrics["speedup"] = median(ratios);
   else
     metrics["speedup_at_least"] = median(ratios);
+  // The other reading: how many steps from the learned θ reach what the whole baseline reached.
+  std::vector<double> end_ratios;
+  for (const auto& c : curves)
+    if (c.meta_steps_to_end >= 0)
+      end_ratios.push_back(static_cast<double>(c.standard.size() - 1) / std::max(1L, c.meta_steps_to_end));
+  metrics["held_out_reaching_standard_end"] = end_ratios.size();
+  if (end_ratios.size() == curves.size()) metrics["speedup_to_standard_end"] = median(end_ratios);
   nlohmann::ordered_json list = nlohmann::ordered_json::array();
   for (const auto& c : curves) {
     nlohmann::ordered_json item;
     item["name"] = c.name;
+    for (const auto& [key, value] : c.values) item[key] = value;
     item["meta"] = c.meta;
     item["standard_steps_to_match"] = c.steps_to_match > 0 ? nlohmann::ordered_json(c.steps_to_match) : nullptr;
     item["standard_final"] = c.standard.back();
+    item["meta_steps_to_standard_final"] =
+        c.meta_steps_to_end >= 0 ? nlohmann::ordered_json(c.meta_steps_to_end) : nullptr;
     list.push_back(item);
   }
   metrics["held_out"] = list;
@@ -213,10 +240,12 @@ int meta_train_and_write(RunSetup& setup) {
     for (std::size_t k = 0; k < held_out.size(); ++k) {
       curves.push_back(evaluation.run(held_out[k], learned, standard, setup.training.seed + 7919 * (k + 1)));
       const HeldOutCurves& c = curves.back();
-      std::printf("  %s: %s %.2f -> %.2f after %d steps (learned); standard %.2f -> %.2f after %zu, matches at %s\n",
-                  c.name.c_str(), c.figure.c_str(), c.meta.front(), c.meta[static_cast<std::size_t>(meta.inner_steps)],
+      std::printf("  %s: %s %.4g -> %.4g after %d steps (learned); standard %.4g -> %.4g after %zu, matches at %s; "
+                  "the learned θ reaches the standard's last at %s\n",
+                  c.name.c_str(), c.figure.name.c_str(), c.meta.front(), c.meta[static_cast<std::size_t>(meta.inner_steps)],
                   meta.inner_steps, c.standard.front(), c.standard.back(), c.standard.size() - 1,
-                  c.steps_to_match > 0 ? ("step " + std::to_string(c.steps_to_match)).c_str() : "no step");
+                  c.steps_to_match > 0 ? ("step " + std::to_string(c.steps_to_match)).c_str() : "no step",
+                  c.meta_steps_to_end >= 0 ? ("step " + std::to_string(c.meta_steps_to_end)).c_str() : "no step");
     }
     field.parameters() = learned;
     write_curves(dir / "held_out_curve.csv", curves);
@@ -225,6 +254,9 @@ int meta_train_and_write(RunSetup& setup) {
       std::printf("speedup (median standard steps to match / inner_steps): %.1fx\n", metrics["speedup"].get<double>());
     else
       std::printf("speedup at least %.1fx (some baselines never matched)\n", metrics["speedup_at_least"].get<double>());
+    if (metrics.contains("speedup_to_standard_end"))
+      std::printf("speedup to the baseline's end (median baseline steps / learned steps to its last figure): %.1fx\n",
+                  metrics["speedup_to_standard_end"].get<double>());
   }
   metrics["nfield_version"] = std::string(version());
   write_metrics_json(dir, metrics);
@@ -242,7 +274,7 @@ void check_meta(const RunSetup& s) {
       throw s.root.child("equation").error(
           "family", "a family of instances is trained by training.meta (a learned initialisation, "
                     "solvers/training/reptile.h) or with a latent code per instance (field.latent: {size: N}, "
-                    "solvers/training/auto_decoder.h); add one, or fit one signal with equation.path");
+                    "solvers/training/auto_decoder.h); add one, or drop equation.family to solve one signal");
     return;
   }
   const io::ConfigNode meta = training.child("meta");

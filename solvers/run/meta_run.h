@@ -24,10 +24,13 @@
 // inner_lr) for curve_steps steps; from the standard θ they take training.stages[0], which
 // must be an Adam stage of constant rate (the baseline a plain `nfield run` would train; its
 // steps are how far the baseline curve goes). Both draw their points by the same seeds. The
-// figure is the instance problem's first progress figure (Problem::progress_metrics; fit:
-// PSNR over the pixels). `speedup` = the median over the held-out instances of
-// standard_steps_to_match / inner_steps (absent when some instance's baseline never matched;
-// then `speedup_at_least` uses the baseline's length for those).
+// figure is the instance's (solvers/run/instance_outputs.h: fit, PSNR over the pixels, higher
+// is better; a drawn PDE family, the grid rel_l2, lower is better). `speedup` = the median over
+// the held-out instances of standard_steps_to_match / inner_steps (absent when some instance's
+// baseline never matched; then `speedup_at_least` uses the baseline's length for those).
+// `speedup_to_standard_end` reads the race the other way: the baseline's steps over the steps
+// the learned θ takes to be as good as the baseline's last figure (meta_steps_to_standard_final
+// per instance; absent unless every learned curve gets there within its curve_steps).
 #pragma once
 
 #include <filesystem>

@@ -32,6 +32,7 @@
 #include "solvers/training/trainer.h"
 #include "solvers/run/field_setup.h"
 #include "solvers/run/latent_run.h"
+#include "solvers/training/auto_decoder.h"
 #include "solvers/run/meta_run.h"
 #include "solvers/run/stop_signal.h"
 #include "solvers/run/run_metrics.h"
@@ -466,9 +467,50 @@ RunSetup load_checkpoint_run(const io::H5Reader& file) {
                    name, {}, checkpoint_data_dir(file));
 }
 
+namespace {
+
+// The row of /latent/codes that `argument` (an instance name, its stem, or a row index) names.
+Eigen::Index code_row(const std::vector<std::string>& names, const std::string& argument, const char* option,
+                      const std::filesystem::path& checkpoint) {
+  for (std::size_t k = 0; k < names.size(); ++k)
+    if (names[k] == argument || std::filesystem::path(names[k]).stem().string() == argument)
+      return static_cast<Eigen::Index>(k);
+  if (!argument.empty() && argument.find_first_not_of("0123456789") == std::string::npos && argument.size() < 10) {
+    const long k = std::stol(argument);
+    if (k < static_cast<long>(names.size())) return k;
+  }
+  std::string valid;
+  for (std::size_t k = 0; k < names.size() && k < 12; ++k) valid += (k ? ", " : "") + names[k];
+  if (names.size() > 12) valid += ", …";
+  throw std::invalid_argument(std::string(option) + " " + argument + ": " + checkpoint.string() + " holds no code of "
+                              "that name or row; its " + std::to_string(names.size()) + " training images are " +
+                              valid + " (rows 0 to " + std::to_string(names.size() - 1) + ")");
+}
+
+// The code `choice` names in a checkpoint's /latent/codes; nullopt when it names none.
+std::optional<Eigen::VectorXd> chosen_code(const io::H5Reader& file, const std::filesystem::path& checkpoint,
+                                           const RenderCode& choice) {
+  if (choice.from.empty() && choice.to.empty()) return std::nullopt;
+  if (choice.from.empty()) throw std::invalid_argument("--to " + choice.to + ": expected --code too (the code at t = 0)");
+  if (!file.has_dataset("latent/codes"))
+    throw std::invalid_argument("--code " + choice.from + ": " + checkpoint.string() +
+                                " holds no latent codes (a run with data.appearance and field.latent writes them)");
+  const Eigen::MatrixXd codes = file.read_matrix<double>("latent/codes");
+  const auto names = file.read_attribute<std::vector<std::string>>("latent/codes", "names");
+  Eigen::VectorXd z = codes.row(code_row(names, choice.from, "--code", checkpoint)).transpose();
+  if (!choice.to.empty()) {
+    const Eigen::VectorXd to = codes.row(code_row(names, choice.to, "--to", checkpoint)).transpose();
+    z = (1 - choice.t) * z + choice.t * to;
+  }
+  return z;
+}
+
+}  // namespace
+
 void render_checkpoint(const std::filesystem::path& checkpoint, const RenderRequest& request,
-                       const std::filesystem::path& out_dir) {
+                       const std::filesystem::path& out_dir, const RenderCode& code) {
   const io::H5Reader file(checkpoint);
+  const std::optional<Eigen::VectorXd> z = chosen_code(file, checkpoint, code);
   RunSetup setup = checkpoint_run(file, out_dir);
   const auto* renders = capability<RendersViews>(*setup.problem);
   if (!renders)
@@ -476,7 +518,10 @@ void render_checkpoint(const std::filesystem::path& checkpoint, const RenderRequ
                                 "' renders no images (nfield render takes a radiance-field checkpoint, problem: nerf)");
   if (auto* state = capability<KeepsState>(*setup.problem)) state->load_state(file);
   // In the precision it was trained in (a float field renders about twice as fast).
-  const auto render = [&](const auto& field) {
+  const auto render = [&](auto field) {
+    if (z) set_code(field, *z);
+    else if (field.latent_size() > 0 && file.has_dataset("latent/codes"))
+      std::printf("rendering with the code at 0, the codes' prior mean (--code NAME: a training image's appearance)\n");
     const Solution solution = make_solution(field, setup.problem->ansatz());
     renders->render_views(output_context(out_dir, solution, setup, field), request);
   };

@@ -59,9 +59,19 @@ int execute_run(RunSetup& setup, const std::filesystem::path& resume = {});
 nlohmann::ordered_json evaluate_checkpoint(const std::filesystem::path& checkpoint, int grid_points,
                                            const std::filesystem::path& out_dir);
 
+// The appearance a checkpoint with latent codes (/latent/codes: data.appearance) renders
+// with: `from`, and with `to` the code (1 − t)·z_from + t·z_to. Each names a training image by
+// its name (with or without its extension: r_3.png, r_3) or its row in /latent/codes. Both
+// empty: the code 0, the prior's mean.
+struct RenderCode {
+  std::string from, to;
+  double t = 0.5;
+};
+
 // Renders views of a radiance-field checkpoint into out_dir (nfield render): the cameras of
-// `request.poses`, or a turntable. Throws for a checkpoint whose problem renders no images.
+// `request.poses`, or a turntable. Throws for a checkpoint whose problem renders no images,
+// and std::invalid_argument naming --code or --to for a code the checkpoint does not hold.
 void render_checkpoint(const std::filesystem::path& checkpoint, const RenderRequest& request,
-                       const std::filesystem::path& out_dir);
+                       const std::filesystem::path& out_dir, const RenderCode& code = {});
 
 }  // namespace nfield::solvers

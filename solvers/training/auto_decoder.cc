@@ -35,7 +35,7 @@ TrainingOptions instance_options(const TrainingOptions& training, std::uint64_t 
 }
 
 // The progress line of step result.steps of `steps`.
-Progress progress_of(const AutoDecoderResult& result, double lr, int steps,
+Progress progress_of(const AutoDecoderResult& result, double lr, int steps, double budget_seconds,
                      std::chrono::steady_clock::time_point started) {
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   Progress progress;
@@ -48,6 +48,7 @@ Progress progress_of(const AutoDecoderResult& result, double lr, int steps,
   progress.term_losses = {result.data_loss, result.prior_loss};
   progress.steps_per_second = seconds > 0 ? static_cast<double>(result.steps) / seconds : 0;
   progress.eta_seconds = progress.steps_per_second > 0 ? static_cast<double>(steps - result.steps) / progress.steps_per_second : 0;
+  if (budget_seconds > 0) progress.eta_seconds = std::min(progress.eta_seconds, std::max(0.0, budget_seconds - seconds));
   return progress;
 }
 
@@ -106,11 +107,14 @@ AutoDecoderResult train_auto_decoder(const std::vector<ProblemInstance>& tasks, 
     field.parameters().segment(slot, c).setZero();
     for (Eigen::Index k = 0; k < codes.rows(); ++k) codes.row(k) = all.segment(p + k * c, c).template cast<double>().transpose();
   };
+  const auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count(); };
   for (int step = 0; step < stage.steps; ++step) {
     if (callbacks.stop_requested && callbacks.stop_requested()) {
       write_back();
       return result;
     }
+    // A time budget (seconds > 0) ends the stage as a step limit does: finished.
+    if (adam_options.seconds > 0 && elapsed() >= adam_options.seconds) break;
     gradient.setZero();
     double data = 0, prior = 0;
     for (int b = 0; b < batch; ++b) {
@@ -134,13 +138,15 @@ AutoDecoderResult train_auto_decoder(const std::vector<ProblemInstance>& tasks, 
       gradient.head(p) += instance_gradient;
     }
     gradient /= static_cast<Scalar>(batch);
-    const double lr = adam_options.learning_rate(step, stage.steps);
+    const double lr = adam_options.seconds > 0
+                          ? adam_options.learning_rate_at(std::min(1.0, elapsed() / adam_options.seconds))
+                          : adam_options.learning_rate(step, stage.steps);
     adam.step(all.data(), gradient.data(), lr);
     result.steps = step + 1;
     result.data_loss = data / batch;
     result.prior_loss = prior / batch;
     if (callbacks.progress)
-      callbacks.progress(progress_of(result, lr, stage.steps, started));
+      callbacks.progress(progress_of(result, lr, stage.steps, adam_options.seconds, started));
   }
   write_back();
   result.finished = true;

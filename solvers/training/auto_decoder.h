@@ -78,7 +78,8 @@ struct AutoDecoderResult {
 };
 
 // Trains field.parameters() and `codes` (K × c, K = tasks.size()) for training.stages[0]
-// (an Adam stage: its steps, rate and schedule). Throws std::runtime_error naming the step and
+// (an Adam stage: its steps, rate and schedule; with `seconds`, until that much wall time has
+// passed or the steps are done, the schedule following the fraction of the time spent). Throws std::runtime_error naming the step and
 // the instance when a loss is not finite.
 template <typename Scalar>
 AutoDecoderResult train_auto_decoder(const std::vector<ProblemInstance>& tasks, fields::Field<Scalar>& field,

@@ -95,6 +95,42 @@ class OutputResidual final : public autodiff::StreamResidual<double> {
   }
 };
 
+// An appearance code (FieldOptions::latent_size) joins the colour layers: it moves the colour
+// and never the density, its gradient matches central differences, and the field finds its
+// slot behind the carried columns (autodiff::OnColumns).
+TEST(RadianceField, AppearanceCodeMovesTheColourOnly) {
+  FieldOptions o = small_nerf();
+  o.latent_size = 3;
+  Field<double> field(o);
+  ASSERT_GE(field.latent_offset(), 0);
+  EXPECT_EQ(field.parameter_count(), Field<double>(small_nerf()).parameter_count() + 3 + 3 * 7);  // z and its weights
+  const Eigen::MatrixXd x = samples(20, 6);
+  const Eigen::MatrixXd a = field.values(x);
+  field.parameters().segment(field.latent_offset(), 3) << 0.7, -0.4, 0.2;
+  const Eigen::MatrixXd b = field.values(x);
+  EXPECT_EQ(a.col(0), b.col(0));  // bit for bit
+  EXPECT_GT((a.rightCols(3) - b.rightCols(3)).norm(), 1e-3);
+
+  field.set_evaluation({5, 2});
+  const autodiff::StreamLayout layout(autodiff::StreamSpec::values(6));
+  autodiff::Streams<double> out;
+  field.evaluate(layout, x, out);
+  const testutil::SquaresLoss<double> loss(testutil::SquaresLoss<double>::balanced_weights(out));
+  Eigen::VectorXd g = Eigen::VectorXd::Zero(field.parameter_count());
+  field.value_and_gradient(field.parameters().data(), layout, autodiff::Batch<double>{x}, loss, g.data());
+  const Eigen::VectorXd theta = field.parameters();
+  for (int j = 0; j < 3; ++j) {
+    const auto at = [&](double h) {
+      field.parameters() = theta;
+      field.parameters()[field.latent_offset() + j] += h;
+      field.evaluate(layout, x, out);
+      return loss.value(out);
+    };
+    const double h = 1e-5, fd = (at(h) - at(-h)) / (2 * h);
+    EXPECT_NEAR(g[field.latent_offset() + j], fd, 1e-7 * (1 + std::abs(fd))) << "code " << j;
+  }
+}
+
 TEST(RadianceField, PerPointJacobianRowsSumToTheGradient) {
   Field<double> field(small_nerf());
   const Eigen::MatrixXd x = samples(9, 5);

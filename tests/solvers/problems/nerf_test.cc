@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -161,6 +162,13 @@ TEST(Nerf, ShortTrainingLowersTheLossAndWritesTestViews) {
   // 18.55 dB over a best constant of 13.96 dB in a 2-thread run (4.6 dB).
   EXPECT_GT(metrics["psnr_mean"].get<double>(), constant + 3.0);
   EXPECT_GT(metrics["ssim_mean"].get<double>(), 0.6);
+  // The halves' PSNRs (NeRF-W's protocol scores right halves): a view's squared error is the
+  // mean of its halves', so its PSNR is at most the worse half's + 10·log10(2) dB, and at
+  // most the halves' mean (log is concave); so are the means over the views.
+  const double left = metrics["psnr_left_half_mean"].get<double>(), right = metrics["psnr_right_half_mean"].get<double>();
+  EXPECT_GT(std::min(left, right), constant);
+  EXPECT_LE(metrics["psnr_mean"].get<double>(), std::min(left, right) + 10 * std::log10(2.0) + 1e-9);
+  EXPECT_LE(metrics["psnr_mean"].get<double>(), 0.5 * (left + right) + 1e-9);
   for (const char* suffix : {"render", "truth", "error", "depth", "opacity"})
     EXPECT_TRUE(std::filesystem::exists(dir / "test_views" / (std::string("test_007_") + suffix + ".png"))) << suffix;
   const io::Image render = io::read_png(dir / "test_views/test_000_render.png");

@@ -325,6 +325,8 @@ int sample_stride(const std::string& config) {
       {"nerf_bunny_hash_grid", 8},
       {"nerf_bunny_mip", 8},
       {"nerf_bunny_quadrature", 8},
+      {"nerf_bunny_appearance", 8},  // ~40 ms (posed images, recoloured)
+      {"nerf_bunny_recoloured", 8},
       {"poisson_image_laplacian", 4},  // ~18 ms
   };
   const auto it = kSampleStride.find(config);

@@ -10,6 +10,7 @@
 // tests/testing/stream_checks.h's latent cases.)
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -162,6 +163,23 @@ TEST(AutoDecoder, CodesTellTheInstancesApartAndAFitWithTheFieldFrozenRecoversOne
   Eigen::VectorXd moved = field.parameters() - before;
   moved.segment(field.latent_offset(), 4).setZero();
   EXPECT_EQ(moved.cwiseAbs().maxCoeff(), 0.0);
+}
+
+// An Adam stage's `seconds` ends an auto-decoder stage as its steps do (a finished run), the
+// schedule following the time spent.
+TEST(AutoDecoder, ASecondsBudgetEndsTheStage) {
+  RunSetup setup = load_run(family_folder("auto_decoder_seconds"),
+                            {"training.stages[0].steps=1000000", "training.stages[0].seconds=0.3"});
+  fields::Field<double> field(setup.field);
+  LatentCodes codes = initial_codes(3, 4, 0.01, 0);
+  const auto started = std::chrono::steady_clock::now();
+  const AutoDecoderResult result = train_auto_decoder(instances(*setup.problem, false), field, codes, setup.training);
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  EXPECT_TRUE(result.finished);
+  EXPECT_GT(result.steps, 0);
+  EXPECT_LT(result.steps, 1000000);
+  EXPECT_GE(wall, 0.3);
+  EXPECT_LT(wall, 10.0);
 }
 
 TEST(AutoDecoder, RunWritesTheCodesAndFitCodeReadsTheCheckpoint) {

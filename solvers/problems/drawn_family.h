@@ -1,0 +1,43 @@
+// SPDX-License-Identifier: MIT
+//
+// A family of PDE instances whose equation constants are drawn from ranges (issue 28, item 5):
+// any problem's `equation` keys, one draw per instance, e.g. Helmholtz with the point source
+// anywhere in a box:
+//
+//   problem: helmholtz
+//   equation:
+//     complex: true
+//     wavenumber: 12
+//     family:
+//       draw:                                  # equation keys, each {range: [lo, hi]} (a number)
+//         source_center: {range: [[-0.4, -0.4], [0.4, 0.4]]}   # or [[lo…], [hi…]] (a list)
+//       instances: 24                          # training instances (≥ 1)
+//       held_out: 4                            # more, drawn after them, for metrics (≥ 0)
+//       seed: 0
+//
+// Instance k's config is the file's with `equation.family` removed and each drawn key set to
+// its value, uniform in its range per component (seeded: the same instances on every
+// platform); the problem's own factory builds it, so every check, error and output is that
+// problem's. The family (Problem::instances, HasInstances) stands for its first training
+// instance, and is trained by training.meta (Reptile, solvers/run/meta_run.h) or with a latent
+// code per instance (solvers/run/latent_run.h). Instances are named instance_K and
+// held_out_K; ProblemInstance::values holds the drawn numbers (KEY, or KEY_i for a list).
+//
+// Errors: a range with lower > upper, a key drawn that the equation also sets, a drawn list
+// whose bounds differ in length; all located at the key.
+#pragma once
+
+#include <memory>
+
+#include "io/config.h"
+#include "solvers/core/problem.h"
+
+namespace nfield::solvers {
+
+// Whether the config's equation holds a drawn family (equation.family.draw).
+bool has_drawn_family(const io::ConfigNode& root);
+
+// The family of `context`'s problem as above, each instance made by `factory`.
+std::unique_ptr<Problem> make_drawn_family(const ProblemContext& context, const ProblemFactory& factory);
+
+}  // namespace nfield::solvers
