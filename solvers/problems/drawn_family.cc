@@ -107,6 +107,9 @@ class DrawnFamily final : public Problem, public HasInstances {
     draws_ = draw_all(settings);
     training_ = settings.instances;
     first_ = build(0);
+    // Every instance once, so that a drawn value its problem refuses is an error at load, not
+    // after training.
+    for (int k = 1; k < static_cast<int>(draws_.size()); ++k) (void)build(k);
     if (first_->ansatz())
       throw equation.error("family", "a family's instances take soft conditions only (no type: dirichlet_hard …)");
     if (first_->unknowns())

@@ -24,7 +24,9 @@
 // held_out_K; ProblemInstance::values holds the drawn numbers (KEY, or KEY_i for a list).
 //
 // Errors: a range with lower > upper, a key drawn that the equation also sets, a drawn list
-// whose bounds differ in length; all located at the key.
+// whose bounds differ in length; all located at the key. Every instance is built once at load,
+// so that a drawn value its problem refuses (a source outside the domain) is reported then, at
+// the key's range, naming the instance and the value.
 #pragma once
 
 #include <memory>

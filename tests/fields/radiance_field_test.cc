@@ -8,6 +8,7 @@
 
 #include <cstring>
 #include <filesystem>
+#include <memory>
 #include <random>
 
 #include "autodiff/on_columns.h"
@@ -43,6 +44,36 @@ Eigen::MatrixXd samples(Eigen::Index n, unsigned seed) {
   return x;
 }
 
+// A squares loss of the field's four outputs at x (balanced by their values at the current
+// parameters), its value at any parameters and its gradient at the current ones.
+class ValuesLoss {
+ public:
+  ValuesLoss(Field<double>& field, Eigen::MatrixXd x) : field_(field), x_(std::move(x)) {
+    field_.set_evaluation({5, 2});
+    field_.evaluate(layout_, x_, out_);
+    loss_ = std::make_unique<testutil::SquaresLoss<double>>(testutil::SquaresLoss<double>::balanced_weights(out_));
+  }
+  double at(const Eigen::VectorXd& theta) {
+    const Eigen::VectorXd kept = field_.parameters();
+    field_.parameters() = theta;
+    field_.evaluate(layout_, x_, out_);
+    field_.parameters() = kept;
+    return loss_->value(out_);
+  }
+  Eigen::VectorXd gradient() {
+    Eigen::VectorXd g = Eigen::VectorXd::Zero(field_.parameter_count());
+    field_.value_and_gradient(field_.parameters().data(), layout_, autodiff::Batch<double>{x_}, *loss_, g.data());
+    return g;
+  }
+
+ private:
+  Field<double>& field_;
+  Eigen::MatrixXd x_;
+  autodiff::StreamLayout layout_{autodiff::StreamSpec::values(6)};
+  autodiff::Streams<double> out_;
+  std::unique_ptr<testutil::SquaresLoss<double>> loss_;
+};
+
 TEST(RadianceField, DensityIgnoresTheDirectionAndColourDoesNot) {
   const Field<double> field(small_nerf());
   Eigen::MatrixXd x = samples(20, 1);
@@ -57,25 +88,13 @@ TEST(RadianceField, DensityIgnoresTheDirectionAndColourDoesNot) {
 TEST(RadianceField, ParameterGradientMatchesCentralDifferences) {
   for (const std::string encoding : {"identity", "positional", "fourier"}) {
     Field<double> field(small_nerf(encoding));
-    field.set_evaluation({5, 2});
-    const Eigen::MatrixXd x = samples(23, 3);
-    const autodiff::StreamLayout layout(autodiff::StreamSpec::values(6));
-    autodiff::Streams<double> out;
-    field.evaluate(layout, x, out);
-    const testutil::SquaresLoss<double> loss(testutil::SquaresLoss<double>::balanced_weights(out));
-    Eigen::VectorXd g = Eigen::VectorXd::Zero(field.parameter_count());
-    field.value_and_gradient(field.parameters().data(), layout, autodiff::Batch<double>{x}, loss, g.data());
+    ValuesLoss loss(field, samples(23, 3));
+    const Eigen::VectorXd g = loss.gradient();
     std::mt19937_64 rng(9);
     Eigen::VectorXd u(g.size());
     for (Eigen::Index i = 0; i < u.size(); ++i) u[i] = static_cast<double>(rng() >> 11) * 0x1.0p-53 - 0.5;
     const Eigen::VectorXd theta = field.parameters();
-    auto at = [&](double h) {
-      field.parameters() = theta + h * u;
-      field.evaluate(layout, x, out);
-      return loss.value(out);
-    };
-    const double h = 1e-5, fd = (at(h) - at(-h)) / (2 * h);
-    field.parameters() = theta;
+    const double h = 1e-5, fd = (loss.at(theta + h * u) - loss.at(theta - h * u)) / (2 * h);
     EXPECT_NEAR(g.dot(u), fd, 1e-6 * (1 + std::abs(fd))) << encoding;
   }
 }
@@ -111,22 +130,12 @@ TEST(RadianceField, AppearanceCodeMovesTheColourOnly) {
   EXPECT_EQ(a.col(0), b.col(0));  // bit for bit
   EXPECT_GT((a.rightCols(3) - b.rightCols(3)).norm(), 1e-3);
 
-  field.set_evaluation({5, 2});
-  const autodiff::StreamLayout layout(autodiff::StreamSpec::values(6));
-  autodiff::Streams<double> out;
-  field.evaluate(layout, x, out);
-  const testutil::SquaresLoss<double> loss(testutil::SquaresLoss<double>::balanced_weights(out));
-  Eigen::VectorXd g = Eigen::VectorXd::Zero(field.parameter_count());
-  field.value_and_gradient(field.parameters().data(), layout, autodiff::Batch<double>{x}, loss, g.data());
-  const Eigen::VectorXd theta = field.parameters();
+  ValuesLoss loss(field, x);
+  const Eigen::VectorXd g = loss.gradient(), theta = field.parameters();
   for (int j = 0; j < 3; ++j) {
-    const auto at = [&](double h) {
-      field.parameters() = theta;
-      field.parameters()[field.latent_offset() + j] += h;
-      field.evaluate(layout, x, out);
-      return loss.value(out);
-    };
-    const double h = 1e-5, fd = (at(h) - at(-h)) / (2 * h);
+    Eigen::VectorXd step = Eigen::VectorXd::Zero(theta.size());
+    step[field.latent_offset() + j] = 1e-5;
+    const double fd = (loss.at(theta + step) - loss.at(theta - step)) / 2e-5;
     EXPECT_NEAR(g[field.latent_offset() + j], fd, 1e-7 * (1 + std::abs(fd))) << "code " << j;
   }
 }

@@ -141,6 +141,9 @@ TEST(DrawnFamily, KeysAreLocated) {
         {6, 26, "equation.family.draw.source_width", "is set too"});
   check(family_config("source_center: {rnge: [[-0.3, -0.2], [0.3, 0.2]]}"),
         {6, 28, "equation.family.draw.source_center.rnge", "unknown key 'rnge' (valid keys: range)"});
+  // A value the problem refuses (a source outside the domain), drawn for some instance.
+  check(family_config("source_center: {range: [[-3, -0.2], [0.3, 0.2]]}"),
+        {6, 27, "equation.family.draw.source_center", "inside the domain"});
   std::string zero = family_config();
   zero.replace(zero.find("instances: 5"), 12, "instances: 0");
   check(zero, {7, 16, "equation.family.instances", "[1, 100000]"});
