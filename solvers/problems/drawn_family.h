@@ -15,6 +15,19 @@
 //       held_out: 4                            # more, drawn after them, for metrics (≥ 0)
 //       seed: 0
 //
+// A source term can be drawn as a Gaussian random field instead of a number:
+//
+//     draw:
+//       source: {sine_series: {modes: 6, decay: 2, scale: 1, solution: exact}}
+//
+// f = Σ_k c_k φ_k over the Dirichlet eigenfunctions of the Laplacian on the domain's box,
+// φ_k = Π_i sin(k_i π (x_i − lower_i) / L_i), k ∈ {1 … modes}^d, Δφ_k = −λ_k φ_k with
+// λ_k = Σ_i (k_i π / L_i)², and c_k ~ N(0, scale² (λ_k / λ_1)^(−decay)): a smooth random field
+// whose smoothness grows with `decay` (a truncated Karhunen–Loève expansion of a field with
+// that spectrum). With `solution: KEY`, equation.KEY gets u = Σ_k −(c_k / λ_k) φ_k, the exact
+// solution of Δu = f with u = 0 on the box's faces (Poisson's `exact`). Both are expressions
+// over x, y, z of modes^d terms.
+//
 // Instance k's config is the file's with `equation.family` removed and each drawn key set to
 // its value, uniform in its range per component (seeded: the same instances on every
 // platform); the problem's own factory builds it, so every check, error and output is that
@@ -30,11 +43,21 @@
 #pragma once
 
 #include <memory>
+#include <random>
+#include <string>
+#include <vector>
 
 #include "io/config.h"
 #include "solvers/core/problem.h"
 
 namespace nfield::solvers {
+
+// One draw of the sine series above on the box [lower, upper]: the expressions of f and u.
+struct SineSeriesDraw {
+  std::string field, solution;
+};
+SineSeriesDraw draw_sine_series(const std::vector<double>& lower, const std::vector<double>& upper, int modes,
+                                double decay, double scale, std::mt19937_64& engine);
 
 // Whether the config's equation holds a drawn family (equation.family.draw).
 bool has_drawn_family(const io::ConfigNode& root);

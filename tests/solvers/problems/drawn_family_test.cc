@@ -7,13 +7,19 @@
 // run with its held-out code fits; every key's errors are located.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include "io/expression.h"
 #include "solvers/core/problem_capabilities.h"
+#include "solvers/problems/drawn_family.h"
 #include "solvers/run/run.h"
 #include "tests/testing/config_errors.h"
 #include "tests/testing/scratch.h"
@@ -129,6 +135,73 @@ TEST(DrawnFamily, LatentRunFitsHeldOutCodesAndReportsTheirGridError) {
   EXPECT_TRUE(fs::exists(dir / "run/held_out/held_out_001/solution.vti"));
 }
 
+// A Gaussian random field drawn as a sine series: u solves Δu = f (central differences of the
+// expressions) and vanishes on the box's faces; draws differ.
+TEST(DrawnFamily, SineSeriesSolvesPoissonOnItsBox) {
+  std::mt19937_64 engine(4);
+  const std::vector<double> lower{0.0, -1.0}, upper{1.0, 2.0};
+  const SineSeriesDraw a = draw_sine_series(lower, upper, 4, 2.0, 1.0, engine);
+  const SineSeriesDraw b = draw_sine_series(lower, upper, 4, 2.0, 1.0, engine);
+  EXPECT_NE(a.field, b.field);
+  const io::Expression f(a.field, {"x", "y"}), u(a.solution, {"x", "y"});
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> ux(0.05, 0.95), uy(-0.95, 1.95);
+  double largest = 0, worst = 0;
+  const double h = 1e-3;
+  for (int n = 0; n < 50; ++n) {
+    const double x = ux(rng), y = uy(rng);
+    const auto at = [&](double px, double py) { return u.evaluate(std::vector<double>{px, py}); };
+    const double laplacian = (at(x + h, y) + at(x - h, y) + at(x, y + h) + at(x, y - h) - 4 * at(x, y)) / (h * h);
+    const double fx = f.evaluate(std::vector<double>{x, y});
+    largest = std::max(largest, std::abs(fx));
+    worst = std::max(worst, std::abs(laplacian - fx));
+  }
+  EXPECT_GT(largest, 0.1);
+  EXPECT_LT(worst, 1e-4 * largest);
+  for (double t : {0.0, 0.3, 0.77, 1.0}) {
+    EXPECT_NEAR(u.evaluate(std::vector<double>{0.0, -1.0 + 3 * t}), 0.0, 1e-12);
+    EXPECT_NEAR(u.evaluate(std::vector<double>{1.0, -1.0 + 3 * t}), 0.0, 1e-12);
+    EXPECT_NEAR(u.evaluate(std::vector<double>{t, -1.0}), 0.0, 1e-12);
+    EXPECT_NEAR(u.evaluate(std::vector<double>{t, 2.0}), 0.0, 1e-12);
+  }
+}
+
+std::string poisson_family(const std::string& draw, const std::string& equation_extra = "") {
+  return "problem: poisson\n"
+         "domain: {lower: [0, 0], upper: [1, 1]}\n"
+         "equation:\n"
+         "  family:\n"
+         "    draw: {" + draw + "}\n"
+         "    instances: 3\n" + equation_extra +
+         "conditions: [{on: boundary, type: dirichlet, value: \"0\"}]\n"
+         "field: {type: siren, hidden: [8]}\n"
+         "training: {meta: {algorithm: reptile, steps: 2}, stages: [{optimizer: adam, steps: 4, lr: 1.0e-3}]}\n";
+}
+
+TEST(DrawnFamily, PoissonSourcesFromAGaussianRandomField) {
+  const RunSetup setup = load_run(
+      testutil::write_config("drawn_family_poisson",
+                             poisson_family("source: {sine_series: {modes: 3, decay: 2, solution: exact}}")),
+      {});
+  const auto training = instances(*setup.problem, false);
+  ASSERT_EQ(training.size(), 3U);
+  Eigen::MatrixXd points(3, 2);
+  points << 0.3, 0.6, 0.0, 0.4, 0.5, 1.0;
+  const Eigen::MatrixXd u0 = training[0].problem->exact(points), u1 = training[1].problem->exact(points);
+  EXPECT_GT(std::abs(u0(0, 0) - u1(0, 0)), 1e-6);  // each instance its own source
+  EXPECT_NEAR(u0(1, 0), 0.0, 1e-12);                // zero on the faces
+  EXPECT_NEAR(u1(2, 0), 0.0, 1e-12);
+  const auto check = [](const std::string& text, const testutil::Located& want) {
+    testutil::expect_located_error(testutil::write_config("drawn_family_poisson_errors", text), want);
+  };
+  check(poisson_family("source: {sine_series: {modes: 3, solution: exact}}", "  exact: \"0\"\n"),
+        {5, 55, "equation.family.draw.source.sine_series.solution", "is set too"});
+  check(poisson_family("source: {sine_series: {modes: 0}}"),
+        {5, 42, "equation.family.draw.source.sine_series.modes", "[1, 32]"});
+  check(poisson_family("source: {sine_series: {modes: 3}, range: [0, 1]}"),
+        {5, 34, "equation.family.draw.source.sine_series", "not both"});
+}
+
 TEST(DrawnFamily, KeysAreLocated) {
   const auto check = [](const std::string& text, const testutil::Located& want) {
     testutil::expect_located_error(testutil::write_config("drawn_family_errors", text), want);
@@ -140,7 +213,7 @@ TEST(DrawnFamily, KeysAreLocated) {
   check(family_config("source_width: {range: [0.05, 0.1]}"),
         {6, 26, "equation.family.draw.source_width", "is set too"});
   check(family_config("source_center: {rnge: [[-0.3, -0.2], [0.3, 0.2]]}"),
-        {6, 28, "equation.family.draw.source_center.rnge", "unknown key 'rnge' (valid keys: range)"});
+        {6, 28, "equation.family.draw.source_center.rnge", "unknown key 'rnge' (valid keys: range, sine_series)"});
   // A value the problem refuses (a source outside the domain), drawn for some instance.
   check(family_config("source_center: {range: [[-3, -0.2], [0.3, 0.2]]}"),
         {6, 27, "equation.family.draw.source_center", "inside the domain"});
