@@ -83,20 +83,13 @@ RecolourSettings read_recolour(const io::ConfigNode& node) {
   return r;
 }
 
-// Mean squared error over the columns [begin, end) of a view `width` wide.
-double columns_mse(const Eigen::MatrixXf& image, const Eigen::MatrixXf& truth, int width, int begin, int end) {
-  double sum = 0;
-  Eigen::Index n = 0;
-  for (Eigen::Index p = 0; p < image.rows(); ++p) {
-    const int c = static_cast<int>(p % width);
-    if (c < begin || c >= end) continue;
-    sum += (image.row(p) - truth.row(p)).cast<double>().squaredNorm();
-    n += 3;
-  }
-  return n > 0 ? sum / static_cast<double>(n) : 0.0;
+// io::psnr over the columns [begin, end) of a view `width` wide.
+double psnr_of_columns(const Eigen::MatrixXf& image, const Eigen::MatrixXf& truth, int width, int begin, int end) {
+  std::vector<Eigen::Index> rows;
+  for (Eigen::Index p = 0; p < image.rows(); ++p)
+    if (const int c = static_cast<int>(p % width); c >= begin && c < end) rows.push_back(p);
+  return io::psnr(image(rows, Eigen::all), truth(rows, Eigen::all));
 }
-
-double psnr_of_mse(double mse) { return -10 * std::log10(std::max(mse, 1e-20)); }
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -201,7 +194,7 @@ double RadianceScene::columns_psnr(const RenderRays& render, int first_column) c
   if (!test_) throw std::logic_error("columns_psnr: the scene has no test view");
   const View view = render_view(*test_, 0, render);
   const int width = test_->intrinsics.width;
-  return psnr_of_mse(columns_mse(view.rgb, view.truth, width, first_column, width));
+  return psnr_of_columns(view.rgb, view.truth, width, first_column, width);
 }
 
 void RadianceScene::render_views(const OutputContext& context, const RenderRequest& request,
@@ -261,8 +254,8 @@ double RadianceScene::write_test_views(const OutputContext& context, const Rende
     const Eigen::MatrixXf& truth = test_->frames[f].rgb;
     const double psnr = io::psnr(view.rgb, truth);
     const double ssim = io::ssim(view.rgb, truth, width, height);
-    left_sum += psnr_of_mse(columns_mse(view.rgb, truth, width, 0, width / 2));
-    right_sum += psnr_of_mse(columns_mse(view.rgb, truth, width, width / 2, width));
+    left_sum += psnr_of_columns(view.rgb, truth, width, 0, width / 2);
+    right_sum += psnr_of_columns(view.rgb, truth, width, width / 2, width);
     char name[64];
     std::snprintf(name, sizeof name, "test_%03zu", f);
     metrics.emplace_back(std::string("psnr_") + name, psnr);
