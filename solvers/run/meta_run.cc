@@ -18,6 +18,7 @@
 #include "solvers/core/solution.h"
 #include "solvers/training/optimizers.h"
 #include "solvers/training/progress_printer.h"
+#include "solvers/training/maml.h"
 #include "solvers/training/reptile.h"
 #include "solvers/run/instance_outputs.h"
 #include "solvers/run/run_metrics.h"
@@ -50,8 +51,10 @@ class HeldOutEvaluation {
       : setup_(setup), field_(field), dir_(dir) {}
 
   // The curves of `instance` from θ_meta and from θ_standard; writes its snapshots.
+  // `rates`: the learned per-parameter inner rates, when there are (maml.h).
   HeldOutCurves run(const ProblemInstance& instance, const autodiff::Vector<Scalar>& meta_theta,
-                    const autodiff::Vector<Scalar>& standard_theta, std::uint64_t seed) {
+                    const autodiff::Vector<Scalar>& standard_theta, std::uint64_t seed,
+                    const autodiff::Vector<Scalar>* rates) {
     const MetaOptions& meta = setup_.training.meta;
     const StageOptions& stage = setup_.training.stages.front();
     const Problem& problem = *instance.problem;
@@ -72,7 +75,7 @@ class HeldOutEvaluation {
     field_.parameters() = meta_theta;
     record(c.meta, "meta", 0, true);
     adapt(problem, field_, setup_.training, meta.inner_optimizer, meta.inner_lr, last, seed,
-          [&](int s) { record(c.meta, "meta", s, snapshot_at(s)); });
+          [&](int s) { record(c.meta, "meta", s, snapshot_at(s)); }, rates);
     field_.parameters() = standard_theta;
     record(c.standard, "standard", 0, true);
     const double lr = stage.options<AdamStageOptions>().lr;
@@ -183,10 +186,11 @@ void summarise(nlohmann::ordered_json& metrics, const std::vector<HeldOutCurves>
   metrics["held_out"] = list;
 }
 
-void write_meta_checkpoint(const fs::path& path, const auto& field, const RunSetup& setup,
+void write_meta_checkpoint(const fs::path& path, const auto& field, const auto& rates, const RunSetup& setup,
                            const std::string& config_text) {
   io::H5Writer file(path);
   fields::save_field(file, field);
+  if (rates.size() > 0) file.write("/meta/inner_rates", rates.template cast<double>().eval());
   file.write_attribute("/", "config", config_text);
   file.write_attribute("/", "config_dir", fs::absolute(setup.data_dir).lexically_normal().string());
   file.write_attribute("/", "nfield_version", std::string(version()));
@@ -205,18 +209,20 @@ int meta_train_and_write(RunSetup& setup) {
   if (setup.init.parameters.size() > 0)
     field.parameters().head(setup.init.parameters.size()) = setup.init.parameters.cast<Scalar>();
   const autodiff::Vector<Scalar> standard = field.parameters();
+  autodiff::Vector<Scalar> rates;  // learned per-parameter inner rates (maml.h), when asked for
   fs::create_directories(dir);
   io::write_atomically(dir / "config.yaml", [&](const fs::path& p) { std::ofstream(p) << config_text << "\n"; });
   std::printf("meta-learning (%s) over %zu training instances, %zu held out: %d outer steps of %d draws x %d %s steps\n",
               meta.algorithm.c_str(), tasks.size(), held_out.size(), meta.steps, meta.tasks_per_step,
               meta.inner_steps, meta.inner_optimizer.c_str());
   const auto started = std::chrono::steady_clock::now();
-  const ReptileResult result = train_with_progress(setup, [&](const auto& stop_requested, const auto& progress) {
-    return run_reptile(tasks, field, setup.training, meta, {stop_requested, progress});
+  const MetaResult result = train_with_progress(setup, [&](const auto& stop_requested, const auto& progress) {
+    if (meta.algorithm == "reptile") return run_reptile(tasks, field, setup.training, meta, {stop_requested, progress});
+    return run_maml(tasks, field, setup.training, meta, {stop_requested, progress}, &rates);
   });
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   if (!result.finished) std::printf("\ninterrupted at outer step %ld: writing the initialisation reached\n", result.steps);
-  write_meta_checkpoint(dir / "checkpoint.h5", field, setup, config_text);
+  write_meta_checkpoint(dir / "checkpoint.h5", field, rates, setup, config_text);
   const autodiff::Vector<Scalar> learned = field.parameters();
 
   nlohmann::ordered_json metrics;
@@ -231,6 +237,11 @@ int meta_train_and_write(RunSetup& setup) {
   metrics["mean_inner_loss_last"] = result.mean_last_loss;
   metrics["precision"] = setup.training.precision;
   metrics["parameters"] = field.parameter_count();
+  if (rates.size() > 0) {
+    metrics["inner_rate_min"] = static_cast<double>(rates.minCoeff());
+    metrics["inner_rate_mean"] = static_cast<double>(rates.mean());
+    metrics["inner_rate_max"] = static_cast<double>(rates.maxCoeff());
+  }
   if (result.finished && !held_out.empty()) {
     std::printf("held-out curves: %d %s steps from the learned initialisation, %d adam steps from the standard one\n",
                 std::max(meta.curve_steps, meta.inner_steps), meta.inner_optimizer.c_str(),
@@ -238,7 +249,8 @@ int meta_train_and_write(RunSetup& setup) {
     HeldOutEvaluation<Scalar> evaluation(setup, field, dir);
     std::vector<HeldOutCurves> curves;
     for (std::size_t k = 0; k < held_out.size(); ++k) {
-      curves.push_back(evaluation.run(held_out[k], learned, standard, setup.training.seed + 7919 * (k + 1)));
+      curves.push_back(evaluation.run(held_out[k], learned, standard, setup.training.seed + 7919 * (k + 1),
+                                        rates.size() > 0 ? &rates : nullptr));
       const HeldOutCurves& c = curves.back();
       std::printf("  %s: %s %.4g -> %.4g after %d steps (learned); standard %.4g -> %.4g after %zu, matches at %s; "
                   "the learned θ reaches the standard's last at %s\n",

@@ -18,7 +18,7 @@ namespace nfield::solvers {
 template <typename Scalar>
 std::vector<double> adapt(const Problem& problem, fields::Field<Scalar>& field, const TrainingOptions& training,
                           const std::string& optimizer, double lr, int steps, std::uint64_t seed,
-                          const std::function<void(int)>& after_step) {
+                          const std::function<void(int)>& after_step, const autodiff::Vector<Scalar>* rates) {
   TrainingOptions inner = training;
   inner.seed = seed;
   inner.meta = {};
@@ -38,6 +38,8 @@ std::vector<double> adapt(const Problem& problem, fields::Field<Scalar>& field, 
     losses.push_back(loss);
     if (adam)
       adam->step(theta.data(), gradient.data(), lr);
+    else if (rates)
+      theta -= rates->cwiseProduct(gradient);
     else
       theta -= static_cast<Scalar>(lr) * gradient;
     if (after_step) after_step(s + 1);
@@ -45,17 +47,32 @@ std::vector<double> adapt(const Problem& problem, fields::Field<Scalar>& field, 
   return losses;
 }
 
+Progress meta_progress(const char* algorithm, const MetaResult& result, int total_steps, double rate,
+                       double seconds) {
+  Progress p;
+  p.optimizer = algorithm;
+  p.step = result.steps;
+  p.total_steps = total_steps;
+  p.learning_rate = rate;
+  p.loss = result.mean_last_loss;
+  p.term_names = {"before"};
+  p.term_losses = {result.mean_first_loss};
+  p.steps_per_second = seconds > 0 ? static_cast<double>(result.steps) / seconds : 0;
+  p.eta_seconds = p.steps_per_second > 0 ? static_cast<double>(total_steps - result.steps) / p.steps_per_second : 0;
+  return p;
+}
+
 template <typename Scalar>
-ReptileResult run_reptile(const std::vector<ProblemInstance>& tasks, fields::Field<Scalar>& field,
+MetaResult run_reptile(const std::vector<ProblemInstance>& tasks, fields::Field<Scalar>& field,
                           const TrainingOptions& training, const MetaOptions& meta,
-                          const ReptileCallbacks& callbacks) {
+                          const MetaCallbacks& callbacks) {
   if (tasks.empty()) throw std::invalid_argument("run_reptile: no training instances");
   meta.validate();
   using Clock = std::chrono::steady_clock;
   const auto started = Clock::now();
   EpochDraws draws(tasks.size(), training.seed ^ 0x9E3779B97F4A7C15ull);
   autodiff::Vector<Scalar> theta = field.parameters(), sum(theta.size());
-  ReptileResult result;
+  MetaResult result;
   for (int step = 0; step < meta.steps; ++step) {
     if (callbacks.stop_requested && callbacks.stop_requested()) {
       field.parameters() = theta;
@@ -85,20 +102,9 @@ ReptileResult run_reptile(const std::vector<ProblemInstance>& tasks, fields::Fie
     result.steps = step + 1;
     result.mean_first_loss = first / meta.tasks_per_step;
     result.mean_last_loss = last / meta.tasks_per_step;
-    if (callbacks.progress) {
-      const double seconds = std::chrono::duration<double>(Clock::now() - started).count();
-      Progress p;
-      p.optimizer = "reptile";
-      p.step = result.steps;
-      p.total_steps = meta.steps;
-      p.learning_rate = epsilon;
-      p.loss = result.mean_last_loss;
-      p.term_names = {"before"};
-      p.term_losses = {result.mean_first_loss};
-      p.steps_per_second = seconds > 0 ? static_cast<double>(result.steps) / seconds : 0;
-      p.eta_seconds = p.steps_per_second > 0 ? static_cast<double>(meta.steps - result.steps) / p.steps_per_second : 0;
-      callbacks.progress(p);
-    }
+    if (callbacks.progress)
+      callbacks.progress(meta_progress("reptile", result, meta.steps, epsilon,
+                                       std::chrono::duration<double>(Clock::now() - started).count()));
   }
   field.parameters() = theta;
   result.finished = true;
@@ -108,9 +114,9 @@ ReptileResult run_reptile(const std::vector<ProblemInstance>& tasks, fields::Fie
 #define NFIELD_REPTILE(Scalar)                                                                                    \
   template std::vector<double> adapt<Scalar>(const Problem&, fields::Field<Scalar>&, const TrainingOptions&,    \
                                              const std::string&, double, int, std::uint64_t,                     \
-                                             const std::function<void(int)>&);                                   \
-  template ReptileResult run_reptile<Scalar>(const std::vector<ProblemInstance>&, fields::Field<Scalar>&,         \
-                                             const TrainingOptions&, const MetaOptions&, const ReptileCallbacks&);
+                                             const std::function<void(int)>&, const autodiff::Vector<Scalar>*); \
+  template MetaResult run_reptile<Scalar>(const std::vector<ProblemInstance>&, fields::Field<Scalar>&,         \
+                                             const TrainingOptions&, const MetaOptions&, const MetaCallbacks&);
 NFIELD_REPTILE(float)
 NFIELD_REPTILE(double)
 #undef NFIELD_REPTILE

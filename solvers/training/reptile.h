@@ -7,7 +7,7 @@
 //
 //   training:
 //     meta:
-//       algorithm: reptile       # reptile (the only one so far; case-insensitive)
+//       algorithm: reptile       # reptile | maml | fomaml (solvers/training/maml.h; case-insensitive)
 //       steps: 1000              # outer steps
 //       tasks_per_step: 4        # instances drawn per outer step (without replacement: epochs)
 //       inner_steps: 2           # K: steps that adapt a copy of θ to one instance
@@ -68,28 +68,34 @@ struct Progress;
 // K steps of `optimizer` (sgd | adam) at rate `lr` on `problem`'s loss, from and into
 // field.parameters(); `training` gives the batch, block and threads, `seed` the points.
 // Returns the loss before each step. `after_step(s)` is called after step s (1-based).
+// `rates` (sgd only): a rate per parameter instead of lr (MAML's learned rates, maml.h).
 template <typename Scalar>
 std::vector<double> adapt(const Problem& problem, fields::Field<Scalar>& field, const TrainingOptions& training,
                           const std::string& optimizer, double lr, int steps, std::uint64_t seed,
-                          const std::function<void(int)>& after_step = {});
+                          const std::function<void(int)>& after_step = {},
+                          const autodiff::Vector<Scalar>* rates = nullptr);
 
-struct ReptileCallbacks {
+struct MetaCallbacks {
   std::function<bool()> stop_requested;           // polled every outer step
   std::function<void(const Progress&)> progress;  // after every outer step
 };
 
-struct ReptileResult {
+struct MetaResult {
   long steps = 0;                // outer steps taken
   bool finished = false;         // all of them (false: stopped)
   double mean_first_loss = 0;    // of the last outer step: at θ, before adaptation
   double mean_last_loss = 0;     // and at the last inner step (before its update)
 };
 
+// The progress line of a meta-learning outer loop after `result.steps` of `total_steps`
+// (`rate`: the outer step size, `seconds`: the wall time so far).
+Progress meta_progress(const char* algorithm, const MetaResult& result, int total_steps, double rate, double seconds);
+
 // Runs meta.steps outer steps over `tasks`, moving field.parameters() (the initialisation).
 // Throws std::runtime_error when a loss is not finite.
 template <typename Scalar>
-ReptileResult run_reptile(const std::vector<ProblemInstance>& tasks, fields::Field<Scalar>& field,
+MetaResult run_reptile(const std::vector<ProblemInstance>& tasks, fields::Field<Scalar>& field,
                           const TrainingOptions& training, const MetaOptions& meta,
-                          const ReptileCallbacks& callbacks = {});
+                          const MetaCallbacks& callbacks = {});
 
 }  // namespace nfield::solvers

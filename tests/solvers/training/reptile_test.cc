@@ -72,7 +72,7 @@ training:
   for (int i = 0; i < 64; ++i) x.row(i) << -1.0 + (2.0 * (i % 8) + 1.0) / 8.0, 1.0 - (2.0 * (i / 8) + 1.0) / 8.0;
   const Eigen::VectorXd before = field.values(x).col(0);
   ASSERT_GT(std::abs(before.mean() - mean), 0.2);  // it has somewhere to go
-  const ReptileResult result = run_reptile(tasks, field, setup.training, setup.training.meta);
+  const MetaResult result = run_reptile(tasks, field, setup.training, setup.training.meta);
   EXPECT_TRUE(result.finished);
   EXPECT_EQ(result.steps, 300);
   const Eigen::VectorXd after = field.values(x).col(0);
@@ -157,7 +157,7 @@ TEST(Reptile, HeldOutNamesAndCountsAreChecked) {
 }
 
 TEST(Reptile, MetaKeysAreLocated) {
-  expect_located_error(family_config("{images: p}", "  meta: {algorithm: maml}\n"),
+  expect_located_error(family_config("{images: p}", "  meta: {algorithm: imaml}\n"),
                        {7, 21, "training.meta.algorithm", "reptile"});
   expect_located_error(family_config("{images: p}", "  meta: {inner_steps: 0}\n"),
                        {7, 23, "training.meta.inner_steps", "expected"});
