@@ -56,6 +56,13 @@ output: {dir: out}
   return config;
 }
 
+Eigen::VectorXd unit_direction(std::mt19937& rng, Eigen::Index size) {
+  std::normal_distribution<double> normal;
+  Eigen::VectorXd d(size);
+  for (Eigen::Index i = 0; i < size; ++i) d(i) = normal(rng);
+  return d / d.norm();
+}
+
 TEST(Maml, MetaGradientMatchesCentralDifferencesOfTheAdaptedLoss) {
   RunSetup setup = load_run(family("{algorithm: maml, inner_steps: 3, inner_lr: 0.05}"), {});
   const std::vector<ProblemInstance> tasks = instances(*setup.problem, false);
@@ -75,11 +82,8 @@ TEST(Maml, MetaGradientMatchesCentralDifferencesOfTheAdaptedLoss) {
   EXPECT_GT((first_order.gradient - exact.gradient).norm(), 0.05 * exact.gradient.norm());
 
   std::mt19937 rng(3);
-  std::normal_distribution<double> normal;
   for (int trial = 0; trial < 3; ++trial) {
-    Eigen::VectorXd d(theta.size());
-    for (Eigen::Index i = 0; i < d.size(); ++i) d(i) = normal(rng);
-    d /= d.norm();
+    const Eigen::VectorXd d = unit_direction(rng, theta.size());
     const double h = 1e-5;
     const double difference =
         (adapted(theta + h * d, true).loss_after - adapted(theta - h * d, true).loss_after) / (2 * h);
@@ -105,11 +109,8 @@ TEST(Maml, PerParameterRatesGradientsMatchCentralDifferences) {
   };
   const MamlGradient<double> exact = adapted(theta, alpha);
   ASSERT_EQ(exact.rate_gradient.size(), theta.size());
-  std::normal_distribution<double> normal;
   for (int trial = 0; trial < 3; ++trial) {
-    Eigen::VectorXd d(theta.size());
-    for (Eigen::Index i = 0; i < d.size(); ++i) d(i) = normal(rng);
-    d /= d.norm();
+    const Eigen::VectorXd d = unit_direction(rng, theta.size());
     const double h = 1e-5;
     const double along_theta =
         (adapted(theta + h * d, alpha).loss_after - adapted(theta - h * d, alpha).loss_after) / (2 * h);
