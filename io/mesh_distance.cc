@@ -105,7 +105,8 @@ ClosestTriangles closest_triangles(const Eigen::MatrixXd& points, const Triangle
 
 Eigen::MatrixXd triangle_normals(const TriangleMesh& mesh) { return triangle_normals(mesh, nullptr); }
 
-Eigen::VectorXd point_cloud_distance(const Eigen::MatrixXd& points, const Eigen::MatrixXd& cloud) {
+Eigen::Matrix<Eigen::Index, Eigen::Dynamic, 1> nearest_cloud_points(const Eigen::MatrixXd& points,
+                                                                     const Eigen::MatrixXd& cloud) {
   if (cloud.rows() == 0) throw std::invalid_argument("point_cloud_distance: the cloud is empty");
   if (points.cols() != 3 || cloud.cols() != 3)
     throw std::invalid_argument("point_cloud_distance: points need 3 columns");
@@ -113,13 +114,19 @@ Eigen::VectorXd point_cloud_distance(const Eigen::MatrixXd& points, const Eigen:
   vtkNew<vtkStaticPointLocator> locator;
   locator->SetDataSet(poly);
   locator->BuildLocator();
-  Eigen::VectorXd out(points.rows());
+  Eigen::Matrix<Eigen::Index, Eigen::Dynamic, 1> out(points.rows());
 #pragma omp parallel for schedule(dynamic, 1024)
   for (Eigen::Index i = 0; i < points.rows(); ++i) {
     const double x[3] = {points(i, 0), points(i, 1), points(i, 2)};
-    const vtkIdType nearest = locator->FindClosestPoint(x);
-    out(i) = (points.row(i) - cloud.row(nearest)).norm();
+    out(i) = locator->FindClosestPoint(x);
   }
+  return out;
+}
+
+Eigen::VectorXd point_cloud_distance(const Eigen::MatrixXd& points, const Eigen::MatrixXd& cloud) {
+  const auto nearest = nearest_cloud_points(points, cloud);
+  Eigen::VectorXd out(points.rows());
+  for (Eigen::Index i = 0; i < points.rows(); ++i) out(i) = (points.row(i) - cloud.row(nearest(i))).norm();
   return out;
 }
 

@@ -27,8 +27,10 @@ struct ClosestTriangles {
 ClosestTriangles closest_triangles(const Eigen::MatrixXd& points, const TriangleMesh& mesh);
 
 // For each row of `points`: the distance to the nearest row of `cloud` (both n×3), through
-// vtkStaticPointLocator. Throws std::invalid_argument for an empty cloud.
+// vtkStaticPointLocator, or that row's index. Throw std::invalid_argument for an empty cloud.
 Eigen::VectorXd point_cloud_distance(const Eigen::MatrixXd& points, const Eigen::MatrixXd& cloud);
+Eigen::Matrix<Eigen::Index, Eigen::Dynamic, 1> nearest_cloud_points(const Eigen::MatrixXd& points,
+                                                                     const Eigen::MatrixXd& cloud);
 
 // Unit normals of the triangles (right-handed in their vertex order; zero for degenerate ones).
 Eigen::MatrixXd triangle_normals(const TriangleMesh& mesh);

@@ -19,6 +19,8 @@
 //     off_surface_alpha: 100   # α of the off-surface penalty exp(−α|u|)
 //     reference_mesh: ../data/meshes/bunny00.ply   # optional: error metrics against it
 //     box_weight: 0            # > 0: the "box" term below (training.batch.box points a step)
+//     distance_weight: 0       # > 0: the "distance" term below (training.batch.distance)
+//     distance_sigma: 0.02     # its near-surface points' spread, in domain units
 //
 //     loss: siren              # siren | squares (below)
 //
@@ -45,7 +47,13 @@
 //               ‖r‖² = w_eikonal ||∇u| − 1| + w_off exp(−α|u|),
 //               r = [√w_eikonal ρ(|∇u| − 1),  √w_off exp(−α|u|/2)],
 //   "box"       (only with box_weight > 0) batch `box`: points on the domain's faces,
-//               r = √w_box (u − d(x)), d the distance to the nearest cloud point.
+//               r = √w_box (u − d(x)), d the distance to the nearest cloud point;
+//   "distance"  (only with distance_weight > 0) batch `distance`: r = √w_distance (u − s(x)),
+//               s = ± the distance to the nearest cloud point p, + where (x − p)·n_p ≥ 0
+//               (outside: the normals point out), on a pool of 2^17 points made once, half
+//               uniform in the domain and half cloud points moved by N(0, σ²) per coordinate
+//               (σ = distance_sigma). BACON's SDF fits (Lindell et al. 2022)
+//               supervises values this way, near the surface and across the box.
 // with ρ(x) = sign(x) √|x|, so that these are exactly the per-point losses of SIREN's
 // reference code (its means of |u| weighted 3e3, of 1 − cos 1e2, of ||∇u| − 1| 5e1, of
 // exp(−α|u|) 1e2 with α = 100; (ĝ − n)²/2 = 1 − cos). `loss: squares` takes ρ(x) = x
@@ -54,6 +62,11 @@
 // The term weights themselves are 1 (the w_* are inside the residuals). ∂|g|/∂g and ∂ĝ/∂g
 // are taken as 0 where |g| = 0, ∂|u|/∂u as 0 at u = 0, and ρ'(0) as 0.
 //
+// Why the distance term: a field that is a sum of products of sines (BACON, fields/bacon.h)
+// fitted by SIREN's loss alone fills the box with extra zero crossings, as only |∇u| = 1 and
+// |u| away from 0 constrain it there; values set across the box remove them. The sign by the
+// nearest point's normal is wrong only where the nearest point is on the far side of a part
+// thinner than the distance to it, so the near-surface points are where it is trusted most.
 // Why the box term: nothing in SIREN's loss fixes the sign far from the cloud, and a level
 // set that bends back towards the box's edges (where few interior samples fall per unit of
 // face) leaves spurious pieces there. With the normalized cloud inside the domain (margin
@@ -96,8 +109,10 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <limits>
 #include <mutex>
+#include <numbers>
 #include <string>
 #include <unordered_map>
 
@@ -164,6 +179,8 @@ struct SdfSettings {
   double margin = 0.1;
   SdfWeights weights;
   double box_weight = 0;
+  double distance_weight = 0;
+  double distance_sigma = 0.02;
 };
 
 // One shape: its oriented points in domain coordinates, how they map back to the cloud's own,
@@ -175,19 +192,22 @@ struct SdfShape {
   Eigen::Vector3d center = Eigen::Vector3d::Zero(), domain_center = Eigen::Vector3d::Zero();
   std::shared_ptr<io::TriangleMesh> reference;
 
-  // The box term's face pool: points in domain coordinates, their distances to the shape's
-  // points, and the lookup by coordinates; made at the first draw (loading a config, as
-  // `nfield validate` and the config tests do, never needs it).
-  struct BoxPool {
+  // Points with target values (the box term's face pool, the distance term's pool): points
+  // in domain coordinates, their target distances, and the lookup by coordinates; made at the
+  // first draw (loading a config, as `nfield validate` and the config tests do, never needs it).
+  struct ValuePool {
     Eigen::MatrixXd points;
     Eigen::VectorXd distances;
     std::unordered_map<PointKey, Eigen::Index, PointKeyHash> index;
   };
-  const BoxPool& box_pool(const Domain& domain) const;
+  const ValuePool& box_pool(const Domain& domain) const;
+  const ValuePool& distance_pool(const Domain& domain, double sigma) const;
+  // ± the distance from x to the nearest cloud point p, + where (x − p)·n_p ≥ 0.
+  Eigen::VectorXd signed_cloud_distance(const Eigen::MatrixXd& x) const;
 
  private:
-  mutable std::once_flag box_once_;
-  mutable BoxPool box_;
+  mutable std::once_flag box_once_, distance_once_;
+  mutable ValuePool box_, distance_;
 };
 
 // Reads `key` of `node` (a cloud or a mesh file, relative to config_dir) into a shape; errors
@@ -286,7 +306,7 @@ std::shared_ptr<io::TriangleMesh> read_reference(const io::ConfigNode& node, con
 
 // 6 faces × 96² points, one per cell of a 96 × 96 grid on each face (jittered, seed fixed),
 // and their distances to the shape's points.
-const SdfShape::BoxPool& SdfShape::box_pool(const Domain& domain) const {
+const SdfShape::ValuePool& SdfShape::box_pool(const Domain& domain) const {
   std::call_once(box_once_, [&] {
     constexpr int kSide = 96;
     const Eigen::Vector3d lower(domain.lower().data()), upper(domain.upper().data());
@@ -308,6 +328,42 @@ const SdfShape::BoxPool& SdfShape::box_pool(const Domain& domain) const {
     for (Eigen::Index p = 0; p < box_.points.rows(); ++p) box_.index.emplace(key_of(box_.points.row(p).eval().data()), p);
   });
   return box_;
+}
+
+Eigen::VectorXd SdfShape::signed_cloud_distance(const Eigen::MatrixXd& x) const {
+  const auto nearest = io::nearest_cloud_points(x, points);
+  Eigen::VectorXd d(x.rows());
+  for (Eigen::Index p = 0; p < x.rows(); ++p) {
+    const Eigen::RowVector3d offset = x.row(p) - points.row(nearest(p));
+    d(p) = offset.dot(normals.row(nearest(p))) >= 0 ? offset.norm() : -offset.norm();
+  }
+  return d;
+}
+
+// 2^17 points (seed fixed): half uniform in the domain, half cloud points moved by N(0, σ²) in
+// each coordinate (Box–Muller on the engine's own uniforms) and clamped into the domain; and
+// their signed distances to the cloud.
+const SdfShape::ValuePool& SdfShape::distance_pool(const Domain& domain, double sigma) const {
+  std::call_once(distance_once_, [&] {
+    constexpr Eigen::Index kCount = Eigen::Index{1} << 17;
+    const Eigen::Vector3d lower(domain.lower().data()), upper(domain.upper().data());
+    distance_.points.resize(kCount, 3);
+    Random rng(20261127);
+    const auto gauss = [&rng] {
+      return std::sqrt(-2 * std::log1p(-uniform01(rng))) * std::cos(2 * std::numbers::pi * uniform01(rng));
+    };
+    for (Eigen::Index p = 0; p < kCount; ++p) {
+      if (p % 2 == 0) {
+        for (int a = 0; a < 3; ++a) distance_.points(p, a) = lower(a) + (upper(a) - lower(a)) * uniform01(rng);
+        continue;
+      }
+      const auto k = std::min(points.rows() - 1, static_cast<Eigen::Index>(uniform01(rng) * static_cast<double>(points.rows())));
+      for (int a = 0; a < 3; ++a) distance_.points(p, a) = std::clamp(points(k, a) + sigma * gauss(), lower(a), upper(a));
+    }
+    distance_.distances = signed_cloud_distance(distance_.points);
+    for (Eigen::Index p = 0; p < kCount; ++p) distance_.index.emplace(key_of(distance_.points.row(p).eval().data()), p);
+  });
+  return distance_;
 }
 
 // The meshes of equation.family (a folder's *.ply, *.obj, *.vtp and *.off in name order, or a
@@ -372,6 +428,12 @@ class Sdf final : public Problem, public HasInstances {
     if (settings_.box_weight > 0)
       equation.require("box_weight", !settings_.normalize || settings_.margin > 0,
                        "the box term needs the cloud strictly inside the domain: margin > 0");
+    if (equation.has("distance_weight")) settings_.distance_weight = equation.get_nonnegative<double>("distance_weight");
+    if (equation.has("distance_sigma")) {
+      settings_.distance_sigma = equation.get_positive<double>("distance_sigma");
+      equation.require("distance_sigma", settings_.distance_weight > 0,
+                       "the distance term's spread needs the term: distance_weight > 0");
+    }
     if (equation.has("family")) {
       for (const char* key : {"points", "reference_mesh"})
         equation.require(key, !equation.has(key), "a family names its meshes itself (equation.family.meshes): drop " +
@@ -434,36 +496,35 @@ class Sdf final : public Problem, public HasInstances {
     interior.residual = [this](const Eigen::MatrixXd&) -> std::unique_ptr<Residual> {
       return make_sdf_residual(Eigen::MatrixXd(), false, settings_.weights);
     };
-    if (settings_.box_weight == 0) return {surface, interior};
-    LossTerm box;
-    box.name = "box";
-    box.batch_key = "box";
-    box.spec = autodiff::StreamSpec::values(3);
-    box.sample = [this](Random& rng, Eigen::Index n) { return draw_rows(shape_->box_pool(domain_).points, rng, n); };
-    box.residual = [this](const Eigen::MatrixXd& x) -> std::unique_ptr<Residual> {
-      const double root = std::sqrt(settings_.box_weight);
-      Eigen::MatrixXd target(x.rows(), 1);
-      const SdfShape::BoxPool& pool = shape_->box_pool(domain_);
-      for (Eigen::Index p = 0; p < x.rows(); ++p) {
-        const Eigen::RowVector3d row = x.row(p);
-        const auto it = pool.index.find(key_of(row.data()));
-        // Not a pool point (a checkpoint of another pool): the distance computed now.
-        target(p, 0) = root * (it != pool.index.end() ? pool.distances(it->second)
-                                                      : io::point_cloud_distance(row, shape_->points)(0));
-      }
-      return std::make_unique<LinearResidual>(
-          std::vector<LinearResidual::Term>{
-              {0, autodiff::StreamLayout::value(), 0, Eigen::VectorXd::Constant(1, root)}},
-          target);
-    };
-    return {surface, interior, box};
+    std::vector<LossTerm> terms{surface, interior};
+    if (settings_.box_weight > 0)
+      terms.push_back(value_term("box", settings_.box_weight, [this]() -> const SdfShape::ValuePool& {
+        return shape_->box_pool(domain_);
+      }, [this](const Eigen::MatrixXd& x) { return io::point_cloud_distance(x, shape_->points); }));
+    if (settings_.distance_weight > 0)
+      terms.push_back(value_term("distance", settings_.distance_weight, [this]() -> const SdfShape::ValuePool& {
+        return shape_->distance_pool(domain_, settings_.distance_sigma);
+      }, [this](const Eigen::MatrixXd& x) { return shape_->signed_cloud_distance(x); }));
+    return terms;
   }
 
   void write_outputs(const OutputContext& context,
                      std::vector<std::pair<std::string, double>>& metrics) const override {
     const io::Grid grid = io::make_grid(domain_.lower(), domain_.upper(), context.grid);
     const Eigen::MatrixXd x = grid.points(3);
-    const Surface output = surface_of(grid, on_grid(x, context.values));
+    // Each surface's metrics take seconds to a minute (Chamfer both ways, signs on the grid):
+    // a line before and after each, so that a multiscale field's outputs do not look hung.
+    const auto timed_surface = [&](const std::string& label, const auto& values) {
+      const auto started = std::chrono::steady_clock::now();
+      std::printf("sdf: %s: zero level set on the output grid and its metrics\n", label.c_str());
+      std::fflush(stdout);
+      Surface surface = surface_of(grid, on_grid(x, values));
+      std::printf("sdf: %s: %ld triangles (%.1f s)\n", label.c_str(), static_cast<long>(surface.mesh.triangles.rows()),
+                  std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
+      std::fflush(stdout);
+      return surface;
+    };
+    const Surface output = timed_surface("surface", context.values);
     write_surface(context.dir, output, "", metrics);
     // A multiscale field (field.type: bacon): each scale's zero level set too (the output
     // scale's is the one above).
@@ -475,7 +536,7 @@ class Sdf final : public Problem, public HasInstances {
           continue;
         }
         const auto values = [&](const Eigen::MatrixXd& points) { return context.scale_values(points, scale); };
-        write_surface(context.dir, surface_of(grid, on_grid(x, values)), suffix, metrics);
+        write_surface(context.dir, timed_surface("surface" + suffix, values), suffix, metrics);
       }
   }
 
@@ -607,6 +668,32 @@ class Sdf final : public Problem, public HasInstances {
   }
 
   // The normals of cloud points x (by exact coordinates, else the nearest cloud point).
+  // A term of residuals √w (u − d) on the points of a pool (batch key = name); a point not in
+  // the pool (a checkpoint of another pool) gets its target from `compute`.
+  static LossTerm value_term(const std::string& name, double weight,
+                             std::function<const SdfShape::ValuePool&()> pool,
+                             std::function<Eigen::VectorXd(const Eigen::MatrixXd&)> compute) {
+    LossTerm term;
+    term.name = name;
+    term.batch_key = name;
+    term.spec = autodiff::StreamSpec::values(3);
+    term.sample = [pool](Random& rng, Eigen::Index n) { return draw_rows(pool().points, rng, n); };
+    term.residual = [pool, compute, root = std::sqrt(weight)](const Eigen::MatrixXd& x) -> std::unique_ptr<Residual> {
+      Eigen::MatrixXd target(x.rows(), 1);
+      const SdfShape::ValuePool& values = pool();
+      for (Eigen::Index p = 0; p < x.rows(); ++p) {
+        const Eigen::RowVector3d row = x.row(p);
+        const auto it = values.index.find(key_of(row.data()));
+        target(p, 0) = root * (it != values.index.end() ? values.distances(it->second) : compute(row)(0));
+      }
+      return std::make_unique<LinearResidual>(
+          std::vector<LinearResidual::Term>{
+              {0, autodiff::StreamLayout::value(), 0, Eigen::VectorXd::Constant(1, root)}},
+          target);
+    };
+    return term;
+  }
+
   Eigen::MatrixXd normals_at(const Eigen::MatrixXd& x) const {
     Eigen::MatrixXd n(x.rows(), 3);
     for (Eigen::Index p = 0; p < x.rows(); ++p) {

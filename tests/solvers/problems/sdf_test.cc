@@ -21,6 +21,7 @@
 #include "io/triangle_mesh.h"
 #include "io/vtk_polydata.h"
 #include "solvers/run/run.h"
+#include "tests/testing/config_errors.h"
 #include "tests/testing/scratch.h"
 #include "tests/testing/sphere_mesh.h"
 
@@ -202,6 +203,54 @@ TEST(Sdf, BoxTermPullsTheFacesToTheCloudDistance) {
   EXPECT_THROW(load_run(write_config("box_negative", "problem: sdf\nequation: {points: " + cloud.string() +
                                                          ", box_weight: -1}\n"), {}),
                io::ConfigError);
+}
+
+// The distance term: points across the domain and near the cloud, each residual √w (u − s)
+// with s the signed distance to the nearest cloud point (− inside); for a dense sphere cloud
+// s ≈ |x| − r.
+TEST(Sdf, DistanceTermPullsTheFieldToTheSignedCloudDistance) {
+  const auto cloud = write_sphere_cloud("distance", 4000, 0.5);
+  const RunSetup setup = load_run(
+      write_config("distance", "problem: sdf\nequation: {points: " + cloud.string() +
+                                   ", normalize: false, distance_weight: 4, distance_sigma: 0.05}\n"
+                                   "training: {batch: {surface: 8, interior: 8, distance: 8}}\n"),
+      {});
+  const auto terms = setup.problem->loss_terms();
+  ASSERT_EQ(terms.size(), 3u);
+  EXPECT_EQ(terms[2].name, "distance");
+  EXPECT_EQ(terms[2].batch_key, "distance");
+  Random rng(11);
+  const Eigen::MatrixXd x = terms[2].sample(rng, 4000);
+  EXPECT_LE(x.cwiseAbs().maxCoeff(), 1.0);
+  // About half near the sphere (within 3σ), the rest spread over the box (some in each octant).
+  const Eigen::ArrayXd from_sphere = (x.rowwise().norm().array() - 0.5).abs();
+  const double near = static_cast<double>((from_sphere < 0.15).count()) / 4000.0;
+  EXPECT_GT(near, 0.5);
+  EXPECT_LT(near, 0.7);
+  EXPECT_GT((x.rowwise().norm().array() > 1.0).count(), 400);  // box corners
+  const autodiff::StreamLayout layout(terms[2].spec);
+  ASSERT_EQ(layout.count(), 1);
+  const auto values = [](const Eigen::MatrixXd& at) {
+    autodiff::Streams<double> streams;
+    streams.resize(at.rows(), 1, 1);
+    streams.stream(0).col(0) = at.rowwise().norm().array() - 0.5;
+    return streams;
+  };
+  // r = 2 (u − s): |s| − ||x| − 0.5| lies in [0, spacing/2) and s has u's sign.
+  Eigen::MatrixXd r;
+  terms[2].residual(x)->evaluate(0, layout, values(x), r);
+  EXPECT_LT(r.cwiseAbs().maxCoeff(), 2 * 0.02);
+  // Off the pool: computed on the spot (the centre: s = −0.5).
+  const Eigen::MatrixXd centre = Eigen::RowVector3d::Zero();
+  terms[2].residual(centre)->evaluate(0, layout, values(centre), r);
+  EXPECT_NEAR(r(0, 0), 0.0, 1e-9);
+  const auto equation = [&](const std::string& keys) {
+    return write_config("distance_bad", "problem: sdf\nequation:\n  points: " + cloud.string() + "\n" + keys);
+  };
+  testutil::expect_located_error(equation("  distance_weight: -1\n"), {4, 20, "equation.distance_weight", "expected"});
+  testutil::expect_located_error(equation("  distance_weight: 1\n  distance_sigma: 0\n"),
+                       {5, 19, "equation.distance_sigma", "expected"});
+  testutil::expect_located_error(equation("  distance_sigma: 0.1\n"), {4, 19, "equation.distance_sigma", "distance_weight > 0"});
 }
 
 TEST(Sdf, NormalizationAndConfigErrors) {
