@@ -316,6 +316,7 @@ int sample_stride(const std::string& config) {
       {"accuracy_wave_2d", 128},  // ~0.9 s a validation (the FD reference)
       {"wave_2d", 128},           // ~0.9 s
       {"sdf_bunny", 128},         // ~0.8 s (the mesh and its signed distances)
+      {"sdf_bunny_bacon", 128},   // the same mesh
       {"poisson_bunny", 32},      // ~2 s (the mesh's smooth distance: a spline fit)
       {"allen_cahn_1d", 4},       // ~0.13 s (the ETDRK4 reference)
       {"sdf_kitten", 16},         // ~140 ms
