@@ -667,7 +667,6 @@ class Sdf final : public Problem, public HasInstances {
     return ((x.rowwise() - shape_->domain_center.transpose()) / shape_->scale).rowwise() + shape_->center.transpose();
   }
 
-  // The normals of cloud points x (by exact coordinates, else the nearest cloud point).
   // A term of residuals √w (u − d) on the points of a pool (batch key = name); a point not in
   // the pool (a checkpoint of another pool) gets its target from `compute`.
   static LossTerm value_term(const std::string& name, double weight,
@@ -694,6 +693,7 @@ class Sdf final : public Problem, public HasInstances {
     return term;
   }
 
+  // The normals of cloud points x (by exact coordinates, else the nearest cloud point).
   Eigen::MatrixXd normals_at(const Eigen::MatrixXd& x) const {
     Eigen::MatrixXd n(x.rows(), 3);
     for (Eigen::Index p = 0; p < x.rows(); ++p) {

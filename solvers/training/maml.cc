@@ -15,28 +15,19 @@
 namespace nfield::solvers {
 namespace {
 
-template <typename Scalar>
-double checked_loss_and_gradient(Trainer<Scalar>& trainer, const autodiff::Vector<Scalar>& at,
-                                 autodiff::Vector<Scalar>& gradient, const char* where) {
-  const double loss = trainer.loss_and_gradient_at(at.data(), gradient.data());
-  if (!std::isfinite(loss) || !gradient.allFinite())
-    throw std::runtime_error(std::string(where) + ": the " + (std::isfinite(loss) ? "gradient" : "loss") +
-                             " is not finite (inner_lr too large?)");
-  return loss;
-}
-
 // H(φ) v by a central difference of the gradient along v (maml.h: the step h).
 template <typename Scalar>
 autodiff::Vector<Scalar> hessian_times(Trainer<Scalar>& trainer, const autodiff::Vector<Scalar>& phi,
-                                       const autodiff::Vector<Scalar>& v) {
+                                       const autodiff::Vector<Scalar>& v, double lr) {
   const double norm = static_cast<double>(v.norm());
   if (norm == 0) return autodiff::Vector<Scalar>::Zero(v.size());
   const double rms = static_cast<double>(phi.norm()) / std::sqrt(static_cast<double>(phi.size()));
   const double h = std::sqrt(static_cast<double>(std::numeric_limits<Scalar>::epsilon())) * (1.0 + rms);
   const autodiff::Vector<Scalar> step = static_cast<Scalar>(h / norm) * v;
+  const autodiff::Vector<Scalar> ahead = phi + step, behind = phi - step;
   autodiff::Vector<Scalar> plus(v.size()), minus(v.size());
-  checked_loss_and_gradient(trainer, autodiff::Vector<Scalar>(phi + step), plus, "a Hessian product");
-  checked_loss_and_gradient(trainer, autodiff::Vector<Scalar>(phi - step), minus, "a Hessian product");
+  finite_loss_and_gradient(trainer, ahead.data(), plus, "a Hessian product", lr);
+  finite_loss_and_gradient(trainer, behind.data(), minus, "a Hessian product", lr);
   return static_cast<Scalar>(norm / (2 * h)) * (plus - minus);
 }
 
@@ -58,21 +49,22 @@ MamlGradient<Scalar> maml_gradient(const Problem& problem, fields::Field<Scalar>
   std::vector<autodiff::Vector<Scalar>> phi{theta}, gradients;
   MamlGradient<Scalar> result;
   for (int j = 0; j < inner_steps; ++j) {
-    const std::string where = "inner step " + std::to_string(j + 1);
     gradients.emplace_back(theta.size());
-    const double loss = checked_loss_and_gradient(trainer, phi.back(), gradients.back(), where.c_str());
+    const double loss = finite_loss_and_gradient(trainer, phi.back().data(), gradients.back(),
+                                                 "inner step " + std::to_string(j + 1), rates.scalar);
     if (j == 0) result.loss_before = loss;
     phi.push_back(phi.back() - scaled(gradients.back()));
   }
   // v = ∂F/∂φ_{j+1} on entry to step j of the backward loop (maml.h).
   autodiff::Vector<Scalar>& v = result.gradient;
   v.resize(theta.size());
-  result.loss_after = checked_loss_and_gradient(trainer, phi.back(), v, "the loss after the inner steps");
+  result.loss_after =
+      finite_loss_and_gradient(trainer, phi.back().data(), v, "the loss after the inner steps", rates.scalar);
   if (rates.per_parameter) result.rate_gradient = autodiff::Vector<Scalar>::Zero(theta.size());
   for (int j = inner_steps - 1; j >= 0; --j) {
     const auto J = static_cast<std::size_t>(j);
     if (rates.per_parameter) result.rate_gradient -= gradients[J].cwiseProduct(v);
-    if (!first_order) v -= hessian_times(trainer, phi[J], scaled(v));
+    if (!first_order) v -= hessian_times(trainer, phi[J], scaled(v), rates.scalar);
   }
   field.parameters() = theta;
   return result;
@@ -85,9 +77,7 @@ MetaResult run_maml(const std::vector<ProblemInstance>& tasks, fields::Field<Sca
   if (tasks.empty()) throw std::invalid_argument("run_maml: no training instances");
   if (meta.learn_inner_lr && !learned_rates)
     throw std::invalid_argument("run_maml: learn_inner_lr needs somewhere to put the rates");
-  meta.validate();
-  if (meta.inner_optimizer != "sgd")
-    throw std::invalid_argument("run_maml: inner_optimizer " + meta.inner_optimizer + ": expected sgd");
+  meta.validate();  // includes: inner_optimizer sgd
   const bool first_order = meta.algorithm == "fomaml";
   using Clock = std::chrono::steady_clock;
   const auto started = Clock::now();

@@ -16,6 +16,16 @@
 namespace nfield::solvers {
 
 template <typename Scalar>
+double finite_loss_and_gradient(Trainer<Scalar>& trainer, const Scalar* params, autodiff::Vector<Scalar>& gradient,
+                                const std::string& where, double lr) {
+  const double loss = trainer.loss_and_gradient_at(params, gradient.data());
+  if (!std::isfinite(loss) || !gradient.allFinite())
+    throw std::runtime_error(where + ": the " + (std::isfinite(loss) ? "gradient" : "loss") + " is not finite (inner_lr " +
+                             std::to_string(lr) + " too large?)");
+  return loss;
+}
+
+template <typename Scalar>
 std::vector<double> adapt(const Problem& problem, fields::Field<Scalar>& field, const TrainingOptions& training,
                           const std::string& optimizer, double lr, int steps, std::uint64_t seed,
                           const std::function<void(int)>& after_step, const autodiff::Vector<Scalar>* rates) {
@@ -30,11 +40,8 @@ std::vector<double> adapt(const Problem& problem, fields::Field<Scalar>& field, 
   std::vector<double> losses;
   losses.reserve(static_cast<std::size_t>(steps));
   for (int s = 0; s < steps; ++s) {
-    const double loss = trainer.loss_and_gradient_at(theta.data(), gradient.data());
-    if (!std::isfinite(loss) || !gradient.allFinite())
-      throw std::runtime_error("inner step " + std::to_string(s + 1) + ": the " +
-                               (std::isfinite(loss) ? "gradient" : "loss") + " is not finite (inner_lr " +
-                               std::to_string(lr) + " too large?)");
+    const double loss =
+        finite_loss_and_gradient(trainer, theta.data(), gradient, "inner step " + std::to_string(s + 1), lr);
     losses.push_back(loss);
     if (adam)
       adam->step(theta.data(), gradient.data(), lr);
@@ -112,6 +119,8 @@ MetaResult run_reptile(const std::vector<ProblemInstance>& tasks, fields::Field<
 }
 
 #define NFIELD_REPTILE(Scalar)                                                                                    \
+  template double finite_loss_and_gradient<Scalar>(Trainer<Scalar>&, const Scalar*, autodiff::Vector<Scalar>&,   \
+                                                   const std::string&, double);                                  \
   template std::vector<double> adapt<Scalar>(const Problem&, fields::Field<Scalar>&, const TrainingOptions&,    \
                                              const std::string&, double, int, std::uint64_t,                     \
                                              const std::function<void(int)>&, const autodiff::Vector<Scalar>*); \

@@ -64,6 +64,14 @@ namespace nfield::solvers {
 
 struct TrainingOptions;
 struct Progress;
+template <typename Scalar>
+class Trainer;
+
+// trainer.loss_and_gradient_at(params, gradient); std::runtime_error "WHERE: the loss (or
+// gradient) is not finite (inner_lr LR too large?)" when either is not.
+template <typename Scalar>
+double finite_loss_and_gradient(Trainer<Scalar>& trainer, const Scalar* params, autodiff::Vector<Scalar>& gradient,
+                                const std::string& where, double lr);
 
 // K steps of `optimizer` (sgd | adam) at rate `lr` on `problem`'s loss, from and into
 // field.parameters(); `training` gives the batch, block and threads, `seed` the points.

@@ -78,6 +78,14 @@ autodiff::Streams<double> sphere_streams(const autodiff::StreamLayout& layout, c
   return s;
 }
 
+// The value stream alone of u = |x| − r at points x.
+autodiff::Streams<double> sphere_values(const Eigen::MatrixXd& x, double r) {
+  autodiff::Streams<double> s;
+  s.resize(x.rows(), 1, 1);
+  s.stream(0).col(0) = x.rowwise().norm().array() - r;
+  return s;
+}
+
 TEST(Sdf, ResidualsVanishOnTheExactDistance) {
   const RunSetup setup = load_run(write_config("exact", sphere_config(write_sphere_cloud("exact", 500, 0.5))), {});
   const auto terms = setup.problem->loss_terms();
@@ -181,19 +189,13 @@ TEST(Sdf, BoxTermPullsTheFacesToTheCloudDistance) {
   // u = |x| − r: the residual is 2 (u − d), with d − (|x| − r) in [0, spacing/2).
   // The term reads values only: one stream.
   ASSERT_EQ(layout.count(), 1);
-  const auto values = [](const Eigen::MatrixXd& at) {
-    autodiff::Streams<double> s;
-    s.resize(at.rows(), 1, 1);
-    s.stream(0).col(0) = at.rowwise().norm().array() - 0.5;
-    return s;
-  };
-  terms[2].residual(x)->evaluate(0, layout, values(x), r);
+  terms[2].residual(x)->evaluate(0, layout, sphere_values(x, 0.5), r);
   ASSERT_EQ(r.cols(), 1);
   EXPECT_LE(r.maxCoeff(), 1e-12);
   EXPECT_GT(r.minCoeff(), -2 * 0.02);
   // A point that is not in the pool gets its distance computed on the spot.
   const Eigen::MatrixXd off = Eigen::RowVector3d(1.0, 0.0, 0.0);
-  terms[2].residual(off)->evaluate(0, layout, values(off), r);
+  terms[2].residual(off)->evaluate(0, layout, sphere_values(off, 0.5), r);
   EXPECT_LE(r(0, 0), 1e-12);
   EXPECT_GT(r(0, 0), -2 * 0.02);
   // Without the weight, no box term; with margin 0, none can be placed outside the shape.
@@ -230,19 +232,13 @@ TEST(Sdf, DistanceTermPullsTheFieldToTheSignedCloudDistance) {
   EXPECT_GT((x.rowwise().norm().array() > 1.0).count(), 400);  // box corners
   const autodiff::StreamLayout layout(terms[2].spec);
   ASSERT_EQ(layout.count(), 1);
-  const auto values = [](const Eigen::MatrixXd& at) {
-    autodiff::Streams<double> streams;
-    streams.resize(at.rows(), 1, 1);
-    streams.stream(0).col(0) = at.rowwise().norm().array() - 0.5;
-    return streams;
-  };
   // r = 2 (u − s): |s| − ||x| − 0.5| lies in [0, spacing/2) and s has u's sign.
   Eigen::MatrixXd r;
-  terms[2].residual(x)->evaluate(0, layout, values(x), r);
+  terms[2].residual(x)->evaluate(0, layout, sphere_values(x, 0.5), r);
   EXPECT_LT(r.cwiseAbs().maxCoeff(), 2 * 0.02);
   // Off the pool: computed on the spot (the centre: s = −0.5).
   const Eigen::MatrixXd centre = Eigen::RowVector3d::Zero();
-  terms[2].residual(centre)->evaluate(0, layout, values(centre), r);
+  terms[2].residual(centre)->evaluate(0, layout, sphere_values(centre, 0.5), r);
   EXPECT_NEAR(r(0, 0), 0.0, 1e-9);
   const auto equation = [&](const std::string& keys) {
     return write_config("distance_bad", "problem: sdf\nequation:\n  points: " + cloud.string() + "\n" + keys);
