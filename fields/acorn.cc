@@ -253,6 +253,12 @@ void AcornEncoding<Scalar>::forward(const StreamLayout& layout, const Scalar* pa
   }
   std::vector<Matrix<Scalar>> layers;
   encode(params, unique, layers);
+  for (size_t slot = 0; slot < unique.size(); ++slot) {
+    const std::vector<double>& kept = tree_->blocks()[static_cast<size_t>(unique[slot])].grid;
+    if (!kept.empty())
+      layers.back().col(static_cast<Eigen::Index>(slot)) =
+          Eigen::Map<const Eigen::VectorXd>(kept.data(), static_cast<Eigen::Index>(kept.size())).cast<Scalar>();
+  }
   out.resize(n, in.count, c_count);
   out.data.setZero();
   Corners<Scalar> k;
@@ -324,6 +330,9 @@ void AcornEncoding<Scalar>::backward(const StreamLayout& layout, const Scalar* p
       }
     }
   }
+  // Frozen blocks' kept grids are constants of the pass.
+  for (Eigen::Index slot = 0; slot < delta.cols(); ++slot)
+    if (!tree_->blocks()[static_cast<size_t>(saved[1](slot, 0))].grid.empty()) delta.col(slot).setZero();
   // The encoder's reverse pass, all blocks at once.
   std::vector<Eigen::Index> offset(widths_.size(), 0);
   for (size_t l = 1; l < widths_.size(); ++l)

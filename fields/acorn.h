@@ -29,6 +29,9 @@
 // (multilinear across grid cells, then the decoder's smooth or ReLU layers), C^∞ inside a cell
 // for a smooth decoder activation. So ACORN fits signals (images, occupancy), not PDEs.
 //
+// Frozen blocks (training's freeze_below, solvers/training/block_allocation.h) read the grid
+// they had when they froze (Block::grid), not the encoder, and pass no gradient to it.
+//
 // Reverse pass: the feature adjoint of each point scatters into its block's grid adjoint
 // (W_v, and ∂W_v/∂x · a for tangent streams), then one reverse pass of the encoder per block.
 // No input adjoint (the module is a field's first; Sequential asks none of it) and no

@@ -29,6 +29,11 @@ struct Block {
   std::array<int, 3> index{0, 0, 0};
   bool frozen = false;
   double error = 0;  // the last estimate: mean squared error × the block's volume fraction
+  // A frozen block's feature grid as it was when the block froze (C · G^d, fields/acorn.h's
+  // layout), read instead of the encoder's: the encoder is shared, so a frozen block that read
+  // it would drift as training moves it for the other blocks, with no points there to hold
+  // it (ACORN prunes such blocks). Empty: the block reads the encoder.
+  std::vector<double> grid;
 };
 
 // Largest max_level for a dimension (the lookup table's bound above).

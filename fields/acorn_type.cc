@@ -19,8 +19,13 @@
 //
 // Checkpoints keep the options as acorn_* attributes and the tree as acorn_block_level,
 // acorn_block_index (d per block), acorn_block_frozen and acorn_block_error, one entry per
-// leaf in the tree's order, so a resumed run and `nfield eval` see the same blocks.
+// leaf in the tree's order, and the grids frozen blocks keep as the dataset acorn_kept_grids
+// (C · G^d × k, a column per such block) with their indices in the attribute acorn_kept_blocks,
+// so a resumed run and `nfield eval` see the same blocks.
 #include <any>
+#include <cmath>
+#include <string>
+#include <vector>
 #include <span>
 #include <stdexcept>
 
@@ -133,6 +138,19 @@ class AcornType final : public FieldTypeOf<AcornType> {
     file.write_attribute(group, "acorn_block_index", std::span<const std::int64_t>(index));
     file.write_attribute(group, "acorn_block_frozen", std::span<const std::int64_t>(frozen));
     file.write_attribute(group, "acorn_block_error", std::span<const double>(error));
+    // The kept grids of frozen blocks (fields::Block::grid), one column each in the tree's order.
+    std::vector<std::int64_t> kept;
+    for (size_t b = 0; b < a.tree->blocks().size(); ++b)
+      if (!a.tree->blocks()[b].grid.empty()) kept.push_back(static_cast<std::int64_t>(b));
+    if (kept.empty()) return;
+    const auto rows = static_cast<Eigen::Index>(a.tree->blocks()[static_cast<size_t>(kept[0])].grid.size());
+    Eigen::MatrixXd grids(rows, static_cast<Eigen::Index>(kept.size()));
+    for (size_t k = 0; k < kept.size(); ++k) {
+      const std::vector<double>& g = a.tree->blocks()[static_cast<size_t>(kept[k])].grid;
+      grids.col(static_cast<Eigen::Index>(k)) = Eigen::Map<const Eigen::VectorXd>(g.data(), rows);
+    }
+    file.write(group + "/acorn_kept_grids", grids);
+    file.write_attribute(group, "acorn_kept_blocks", std::span<const std::int64_t>(kept));
   }
   void load(const io::H5Reader& file, const std::string& group, FieldOptions& o) const override {
     AcornOptions a;
@@ -163,6 +181,24 @@ class AcornType final : public FieldTypeOf<AcornType> {
         for (size_t j = 0; j < d; ++j) blocks[b].index[j] = static_cast<int>(index[b * d + j]);
         blocks[b].frozen = frozen[b] != 0;
         blocks[b].error = error[b];
+      }
+      if (file.has_attribute(group, "acorn_kept_blocks")) {
+        const auto kept = file.read_attribute<std::vector<std::int64_t>>(group, "acorn_kept_blocks");
+        const Eigen::MatrixXd grids = file.read_matrix<double>(group + "/acorn_kept_grids");
+        const Eigen::Index rows = static_cast<Eigen::Index>(a.features) *
+                                  static_cast<Eigen::Index>(std::pow(a.grid, o.input_dim));
+        if (grids.cols() != static_cast<Eigen::Index>(kept.size()) || grids.rows() != rows)
+          throw io::H5Error(file.path().string() + ": " + group + ": acorn_kept_grids is " +
+                            std::to_string(grids.rows()) + " x " + std::to_string(grids.cols()) + ", expected " +
+                            std::to_string(rows) + " x " + std::to_string(kept.size()));
+        for (size_t k = 0; k < kept.size(); ++k) {
+          const auto b = static_cast<size_t>(kept[k]);
+          if (kept[k] < 0 || b >= blocks.size() || !blocks[b].frozen)
+            throw io::H5Error(file.path().string() + ": " + group + ": acorn_kept_blocks names block " +
+                              std::to_string(kept[k]) + ", not a frozen block of the tree");
+          const auto column = grids.col(static_cast<Eigen::Index>(k));
+          blocks[b].grid.assign(column.data(), column.data() + rows);
+        }
       }
       try {
         a.tree->set_blocks(std::move(blocks));

@@ -87,6 +87,15 @@ Domain Domain::from_config(const io::ConfigNode& node, const std::filesystem::pa
   }
 }
 
+Domain Domain::box_3d_from_config(const io::ConfigNode& root, const std::string& what) {
+  if (!root.has("domain")) return Domain({-1, -1, -1}, {1, 1, 1});
+  const io::ConfigNode node = root.child("domain");
+  Domain domain = from_config(node);
+  if (domain.has_time()) throw node.error("time", what + " has no time axis");
+  if (domain.space_dim() != 3) throw node.error("lower", what + " needs a 3D domain");
+  return domain;
+}
+
 Domain Domain::from_config(const io::ConfigNode& node) {
   node.require("geometry", !node.has("geometry"),
                "this problem takes a box domain (lower, upper); shapes (domain.geometry) work with "

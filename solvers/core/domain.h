@@ -84,6 +84,9 @@ class Domain {
   // Reads `domain:` {lower, upper, time} or {geometry, time}; files of the geometry (meshes,
   // polygons) are relative to config_dir.
   static Domain from_config(const io::ConfigNode& node, const std::filesystem::path& config_dir);
+  // The `domain:` of a problem over a 3-D box without time (sdf, occupancy): [−1, 1]³ when
+  // `root` has none; errors say that `what` (e.g. "a signed distance field") needs it so.
+  static Domain box_3d_from_config(const io::ConfigNode& root, const std::string& what);
 
   int space_dim() const { return static_cast<int>(lower_.size()); }
   bool has_time() const { return time_.has_value(); }

@@ -15,6 +15,7 @@ void register_problems(Registry<ProblemFactory>& registry) {
   registry.add("helmholtz", make_helmholtz);
   registry.add("eikonal", make_eikonal);
   registry.add("sdf", make_sdf);
+  registry.add("occupancy", make_occupancy);
   registry.add("nerf", make_nerf);
   registry.add("autoint_1d", make_autoint_1d);
   registry.add("autoint_nerf", make_autoint_nerf);
@@ -23,7 +24,7 @@ void register_problems(Registry<ProblemFactory>& registry) {
 }
 
 namespace {
-const std::vector<std::string> kBuiltIn = {"poisson", "poisson_image", "wave",        "helmholtz", "eikonal", "sdf",
+const std::vector<std::string> kBuiltIn = {"poisson", "poisson_image", "wave",        "helmholtz", "eikonal", "sdf", "occupancy",
                                            "nerf",    "autoint_1d",    "autoint_nerf", "fit",       "pde"};
 
 Registry<ProblemFactory>& problems() {

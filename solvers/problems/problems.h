@@ -15,6 +15,7 @@ std::unique_ptr<Problem> make_wave(const ProblemContext& context);
 std::unique_ptr<Problem> make_helmholtz(const ProblemContext& context);
 std::unique_ptr<Problem> make_eikonal(const ProblemContext& context);
 std::unique_ptr<Problem> make_sdf(const ProblemContext& context);
+std::unique_ptr<Problem> make_occupancy(const ProblemContext& context);
 std::unique_ptr<Problem> make_nerf(const ProblemContext& context);
 std::unique_ptr<Problem> make_autoint_1d(const ProblemContext& context);
 std::unique_ptr<Problem> make_autoint_nerf(const ProblemContext& context);

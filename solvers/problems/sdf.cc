@@ -163,15 +163,6 @@ Eigen::MatrixXd draw_rows(const Eigen::MatrixXd& pool, Random& rng, Eigen::Index
   return x;
 }
 
-Domain sdf_domain(const io::ConfigNode& root) {
-  if (!root.has("domain")) return Domain({-1, -1, -1}, {1, 1, 1});
-  const io::ConfigNode node = root.child("domain");
-  Domain domain = Domain::from_config(node);
-  if (domain.has_time()) throw node.error("time", "a signed distance field has no time axis");
-  if (domain.space_dim() != 3) throw node.error("lower", "a signed distance field needs a 3D domain");
-  return domain;
-}
-
 
 // The loss settings every shape of a run shares (a family's instances too).
 struct SdfSettings {
@@ -406,7 +397,7 @@ MeshFamily read_mesh_family(const io::ConfigNode& family, const std::filesystem:
 
 class Sdf final : public Problem, public HasInstances {
  public:
-  explicit Sdf(const ProblemContext& context) : domain_(sdf_domain(context.root)) {
+  explicit Sdf(const ProblemContext& context) : domain_(Domain::box_3d_from_config(context.root, "a signed distance field")) {
     const io::ConfigNode equation = context.root.child("equation");
     settings_.normalize = equation.get_or("normalize", true);
     settings_.margin = equation.get_or("margin", 0.1);

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <numeric>
 #include <sstream>
+#include <stdexcept>
+#include <vector>
 
 #include "fields/acorn_allocation.h"
 #include "io/text.h"
@@ -28,8 +30,29 @@ void BlockAllocation<Scalar>::to_unit(const double* x, double* u) const {
   for (int j = 0; j < dim_; ++j) u[j] = (x[j] - lower_[j]) / range_[j];
 }
 
+namespace {
+
+// Block b's feature grid at the field's parameters, from its acorn encoding (the tree's
+// current layout).
 template <typename Scalar>
-bool BlockAllocation<Scalar>::reallocate(const Eigen::MatrixXd& x, const Eigen::VectorXd& squared) {
+std::vector<double> kept_grid(const fields::Field<Scalar>& field, int b) {
+  const auto& modules = field.network().modules();
+  for (size_t m = 0; m < modules.size(); ++m)
+    if (const auto* acorn = dynamic_cast<const fields::AcornEncoding<Scalar>*>(modules[m].get())) {
+      const autodiff::Vector<Scalar> g =
+          acorn->block_grid(field.parameters().data() + field.network().parameter_offset(m), b);
+      std::vector<double> out(static_cast<size_t>(g.size()));
+      for (Eigen::Index i = 0; i < g.size(); ++i) out[static_cast<size_t>(i)] = static_cast<double>(g(i));
+      return out;
+    }
+  throw std::logic_error("block allocation: the field has no acorn encoding");
+}
+
+}  // namespace
+
+template <typename Scalar>
+bool BlockAllocation<Scalar>::reallocate(const Eigen::MatrixXd& x, const Eigen::VectorXd& squared,
+                                         const fields::Field<Scalar>* field) {
   std::vector<fields::Block> blocks = tree_->blocks();
   std::vector<double> sum(blocks.size(), 0.0);
   std::vector<long> count(blocks.size(), 0);
@@ -48,6 +71,7 @@ bool BlockAllocation<Scalar>::reallocate(const Eigen::MatrixXd& x, const Eigen::
     blocks[b].error = mean * tree_->volume(static_cast<int>(b));
     if (options_.freeze_below > 0 && mean < options_.freeze_below) {
       blocks[b].frozen = true;
+      if (field) blocks[b].grid = kept_grid(*field, static_cast<int>(b));
       changed = true;
     }
   }
@@ -93,7 +117,7 @@ bool BlockAllocation<Scalar>::before_step(StrategyView<Scalar>& view) {
     r.segment(at, xs[t].rows()) = rs[t];
     at += xs[t].rows();
   }
-  return reallocate(x, r);
+  return reallocate(x, r, view.field());
 }
 
 template <typename Scalar>

@@ -10,8 +10,11 @@
 //        the block's volume fraction: E_b, the block's share of the squared error integral.
 //        Blocks without a point keep their last estimate.
 //     2. freeze: an active block whose mean is below freeze_below (> 0) is frozen: no longer
-//        sampled nor reallocated. Its feature grid still comes from the shared encoder, so
-//        it moves a little as training goes on (as in ACORN, which prunes such blocks).
+//        sampled nor reallocated, and its feature grid at this step is kept in the tree
+//        (fields::Block::grid) and read from then on instead of the shared encoder, which
+//        would move it with no points there to hold it (ACORN prunes such blocks). Before
+//        grids were kept, frozen blocks drifted into stray surfaces: 439 pieces on the
+//        occupancy bunny (docs/experiments.md, 2026-11-27 session 24).
 //     3. allocate: fields/acorn_allocation.h's exact optimum under max_blocks; the tree is
 //        replaced, and the step draws new points.
 //   every draw (points_drawn)
@@ -53,7 +56,10 @@ class BlockAllocation final : public TrainingStrategy<Scalar> {
 
   // Estimates the blocks' errors from squared residuals at points x (rows alike), freezes
   // and reallocates; returns whether the tree changed. before_step's work, for tests.
-  bool reallocate(const Eigen::MatrixXd& x, const Eigen::VectorXd& squared);
+  // `field` (null in tests of the allocation alone): a block that freezes keeps its feature
+  // grid at the field's parameters (fields::Block::grid); without it, it keeps none.
+  bool reallocate(const Eigen::MatrixXd& x, const Eigen::VectorXd& squared,
+                  const fields::Field<Scalar>* field = nullptr);
 
  private:
   // x mapped into the unit cube.

@@ -73,6 +73,7 @@ class Trainer<Scalar>::View final : public StrategyView<Scalar> {
     return t_.term_loss(k, t_.field_.parameters().data(), weight, gradient);
   }
   void set_term_loss(std::size_t k, double loss) override { t_.losses_.at(k) = loss; }
+  const fields::Field<Scalar>* field() const override { return &t_.field_; }
 
  private:
   Trainer& t_;

@@ -42,6 +42,7 @@
 #include <Eigen/Core>
 
 #include "autodiff/streams.h"
+#include "fields/field.h"
 #include "io/hdf5_file.h"
 #include "solvers/core/residual.h"
 
@@ -77,6 +78,9 @@ class StrategyView {
   virtual double term_loss(std::size_t k, double weight, Scalar* gradient) = 0;
   // The loss of term k at the step just taken, for progress lines and metrics.
   virtual void set_term_loss(std::size_t k, double loss) = 0;
+  // The field being trained, at its current parameters (null: a view without one, as the
+  // tests' views of bare terms).
+  virtual const fields::Field<Scalar>* field() const { return nullptr; }
 };
 
 template <typename Scalar>
