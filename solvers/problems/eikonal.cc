@@ -504,10 +504,7 @@ class Eikonal final : public Problem {
     for (Eigen::Index p = 0; p < near; ++p) {
       for (;;) {
         // A uniform direction: normal deviates (Box–Muller from the raw engine), normalized.
-        for (int a = 0; a < d; ++a) {
-          const double u1 = 1 - uniform01(rng), u2 = uniform01(rng);
-          direction(a) = std::sqrt(-2 * std::log(u1)) * std::cos(2 * std::numbers::pi * u2);
-        }
+        for (int a = 0; a < d; ++a) direction(a) = standard_normal(rng);
         const double norm = direction.norm();
         if (!(norm > 0)) continue;
         const Eigen::VectorXd point = x0_ + (reach * uniform01(rng) / norm) * direction;

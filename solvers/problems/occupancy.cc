@@ -53,7 +53,6 @@
 #include <cstdio>
 #include <limits>
 #include <memory>
-#include <numbers>
 #include <string>
 #include <vector>
 
@@ -68,6 +67,7 @@
 #include "solvers/core/problem_capabilities.h"
 #include "solvers/geometry/mesh_shape.h"
 #include "solvers/problems/problems.h"
+#include "solvers/problems/shape_placement.h"
 
 namespace nfield::solvers {
 namespace {
@@ -109,11 +109,6 @@ class OccupancyResidual {
   Eigen::VectorXd labels_;
   bool cross_entropy_;
 };
-
-double standard_normal(Random& rng) {
-  const double u1 = 1.0 - uniform01(rng), u2 = uniform01(rng);
-  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * std::numbers::pi * u2);
-}
 
 class Occupancy final : public Problem, public ReportsProgress {
  public:
@@ -175,7 +170,7 @@ class Occupancy final : public Problem, public ReportsProgress {
         std::fflush(stdout);
       }
     }
-    const Agreement a = agreement(u, io::inside_closed_mesh(grid, mesh_));
+    const Agreement a = agreement(u, io::inside_closed_mesh(grid, shape_->mesh()));
     metrics.emplace_back("iou", a.iou());
     metrics.emplace_back("occupancy_accuracy", a.accuracy());
     metrics.emplace_back("iou_resolution", n);
@@ -207,28 +202,22 @@ class Occupancy final : public Problem, public ReportsProgress {
 
   void read_mesh(const io::ConfigNode& equation, const std::filesystem::path& path, bool normalize, double margin) {
     try {
-      mesh_ = io::read_triangle_mesh(path);
+      original_ = io::read_triangle_mesh(path);
     } catch (const std::exception& e) {
       throw equation.error("mesh", e.what());
     }
-    equation.require("mesh", mesh_.triangles.rows() > 0, path.filename().string() + ": expected a mesh with triangles");
-    original_ = mesh_;
+    equation.require("mesh", original_.triangles.rows() > 0, path.filename().string() + ": expected a mesh with triangles");
+    io::TriangleMesh mesh = original_;  // in domain coordinates
     const Eigen::Vector3d lower(domain_.lower().data()), upper(domain_.upper().data());
-    Eigen::MatrixXd& v = mesh_.vertices;
     if (normalize) {
-      const Eigen::Vector3d lo = v.colwise().minCoeff(), hi = v.colwise().maxCoeff();
-      center_ = 0.5 * (lo + hi);
-      domain_center_ = 0.5 * (lower + upper);
-      const double half = 0.5 * (hi - lo).maxCoeff();
-      scale_ = half > 0 ? (1 - margin) * 0.5 * (upper - lower).minCoeff() / half : 1.0;
-      v = ((v.rowwise() - center_.transpose()) * scale_).rowwise() + domain_center_.transpose();
+      placement_ = ShapePlacement::fit(mesh.vertices, lower, upper, margin);
+      mesh.vertices = placement_.to_domain(mesh.vertices);
     } else {
-      const bool inside = ((v.rowwise() - lower.transpose()).array() >= 0).all() &&
-                          ((v.rowwise() - upper.transpose()).array() <= 0).all();
-      equation.require("mesh", inside, path.filename().string() + ": the mesh leaves the domain: set normalize: true or widen the domain");
+      equation.require("mesh", ShapePlacement::within(mesh.vertices, lower, upper),
+                       path.filename().string() + ": the mesh leaves the domain: set normalize: true or widen the domain");
     }
     try {
-      shape_ = std::make_shared<geometry::MeshShape>(mesh_);
+      shape_ = std::make_shared<geometry::MeshShape>(std::move(mesh));
     } catch (const std::exception& e) {
       throw equation.error("mesh", path.filename().string() + ": " + e.what());
     }
@@ -267,7 +256,7 @@ class Occupancy final : public Problem, public ReportsProgress {
   void write_surface(const OutputContext& context, const io::Grid& grid, const Eigen::VectorXd& u,
                      std::vector<std::pair<std::string, double>>& metrics) const {
     io::TriangleMesh surface = io::extract_isosurface(grid, u, threshold(), true);
-    surface.vertices = ((surface.vertices.rowwise() - domain_center_.transpose()) / scale_).rowwise() + center_.transpose();
+    surface.vertices = placement_.to_original(surface.vertices);
     io::write_vtp_mesh(context.dir / "surface.vtp", surface);
     io::write_ply(context.dir / "surface.ply", surface);
     const io::SurfaceComponents pieces = io::surface_components(surface);
@@ -287,9 +276,8 @@ class Occupancy final : public Problem, public ReportsProgress {
   bool cross_entropy_ = true;
   double near_surface_ = 0.5, sigma_ = 0.01;
   int iou_resolution_ = 256;
-  io::TriangleMesh mesh_, original_;  // in domain coordinates; as read
-  Eigen::Vector3d center_ = Eigen::Vector3d::Zero(), domain_center_ = Eigen::Vector3d::Zero();
-  double scale_ = 1;
+  io::TriangleMesh original_;  // as read
+  ShapePlacement placement_;  // the mesh's own coordinates → the domain's
   std::shared_ptr<const geometry::MeshShape> shape_;
   Eigen::MatrixXd progress_points_;
   Eigen::VectorXd progress_labels_;

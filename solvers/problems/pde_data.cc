@@ -16,12 +16,6 @@ int index_of(const std::vector<std::string>& names, const std::string& name) {
   return at == names.end() ? -1 : static_cast<int>(at - names.begin());
 }
 
-// A standard normal draw by Box–Muller on the engine's uniforms.
-double normal(Random& rng) {
-  const double u1 = 1.0 - uniform01(rng), u2 = uniform01(rng);  // u1 in (0, 1]
-  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * std::numbers::pi * u2);
-}
-
 }  // namespace
 
 PdeData::PdeData(const io::ConfigNode& node, const Domain& domain, const std::vector<std::string>& outputs,
@@ -113,7 +107,7 @@ void PdeData::read_exact(const io::ConfigNode& exact, const Domain& domain, cons
   values_ = noise > 0 ? add_noise(clean, noise, rng) : clean;
   if (noise_std > 0)
     for (Eigen::Index c = 0; c < values_.cols(); ++c)
-      for (Eigen::Index i = 0; i < n; ++i) values_(i, c) += noise_std * normal(rng);
+      for (Eigen::Index i = 0; i < n; ++i) values_(i, c) += noise_std * standard_normal(rng);
 }
 
 // `grid: [n₁, …]`: a regular grid of a box domain, n per input (space, then time), ends
@@ -148,7 +142,7 @@ Eigen::MatrixXd PdeData::add_noise(const Eigen::MatrixXd& clean, double noise, R
   for (Eigen::Index c = 0; c < clean.cols(); ++c) {
     const double mean = clean.col(c).mean();
     const double std = std::sqrt((clean.col(c).array() - mean).square().sum() / static_cast<double>(clean.rows()));
-    for (Eigen::Index i = 0; i < clean.rows(); ++i) noisy(i, c) += noise * std * normal(rng);
+    for (Eigen::Index i = 0; i < clean.rows(); ++i) noisy(i, c) += noise * std * standard_normal(rng);
   }
   return noisy;
 }

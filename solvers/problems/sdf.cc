@@ -132,6 +132,7 @@
 #include "solvers/problems/image_family.h"
 #include "solvers/problems/problems.h"
 #include "solvers/problems/sdf_residual.h"
+#include "solvers/problems/shape_placement.h"
 
 namespace nfield::solvers {
 namespace {
@@ -179,8 +180,7 @@ struct SdfSettings {
 struct SdfShape {
   Eigen::MatrixXd points, normals;  // in domain coordinates
   std::unordered_map<PointKey, Eigen::Index, PointKeyHash> index;
-  double scale = 1;
-  Eigen::Vector3d center = Eigen::Vector3d::Zero(), domain_center = Eigen::Vector3d::Zero();
+  ShapePlacement placement;  // the cloud's own coordinates → the domain's (normalize)
   std::shared_ptr<io::TriangleMesh> reference;
 
   // Points with target values (the box term's face pool, the distance term's pool): points
@@ -267,17 +267,11 @@ std::shared_ptr<SdfShape> make_shape(const io::ConfigNode& node, const std::stri
   const Eigen::Vector3d lower(domain.lower().data()), upper(domain.upper().data());
   Eigen::MatrixXd& points = shape->points;
   if (settings.normalize) {
-    const Eigen::Vector3d lo = points.colwise().minCoeff(), hi = points.colwise().maxCoeff();
-    shape->center = 0.5 * (lo + hi);
-    shape->domain_center = 0.5 * (lower + upper);
-    const double half = 0.5 * (hi - lo).maxCoeff();
-    const double room = 0.5 * (upper - lower).minCoeff();
-    shape->scale = half > 0 ? (1 - settings.margin) * room / half : 1.0;
-    points = ((points.rowwise() - shape->center.transpose()) * shape->scale).rowwise() + shape->domain_center.transpose();
+    shape->placement = ShapePlacement::fit(points, lower, upper, settings.margin);
+    points = shape->placement.to_domain(points);
   } else {
-    const bool inside = ((points.rowwise() - lower.transpose()).array() >= 0).all() &&
-                        ((points.rowwise() - upper.transpose()).array() <= 0).all();
-    node.require(key, inside, path.filename().string() + ": the points leave the domain: set normalize: true or widen the domain");
+    node.require(key, ShapePlacement::within(points, lower, upper),
+                 path.filename().string() + ": the points leave the domain: set normalize: true or widen the domain");
   }
   for (Eigen::Index i = 0; i < points.rows(); ++i) shape->index.emplace(key_of(points.row(i).eval().data()), i);
   return shape;
@@ -632,7 +626,7 @@ class Sdf final : public Problem, public HasInstances {
     const Eigen::RowVector3d origin = to_original(Eigen::RowVector3d(grid.origin[0], grid.origin[1], grid.origin[2]));
     for (int a = 0; a < 3; ++a) {
       original.origin[a] = origin(a);
-      original.spacing[a] = grid.spacing[a] / (settings_.normalize ? shape_->scale : 1.0);
+      original.spacing[a] = grid.spacing[a] / (settings_.normalize ? shape_->placement.scale : 1.0);
     }
     const auto inside = io::inside_closed_mesh(original, *shape_->reference);
     const auto near_surface = io::grid_near_mesh(original, *shape_->reference, band);
@@ -655,7 +649,7 @@ class Sdf final : public Problem, public HasInstances {
   // Domain coordinates → the cloud's own.
   Eigen::MatrixXd to_original(const Eigen::MatrixXd& x) const {
     if (!settings_.normalize) return x;
-    return ((x.rowwise() - shape_->domain_center.transpose()) / shape_->scale).rowwise() + shape_->center.transpose();
+    return shape_->placement.to_original(x);
   }
 
   // A term of residuals √w (u − d) on the points of a pool (batch key = name); a point not in

@@ -22,10 +22,12 @@
 // a checkpoint stores just those counts and a resumed run draws the same points.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <iosfwd>
 #include <map>
 #include <memory>
+#include <numbers>
 #include <random>
 #include <string>
 #include <vector>
@@ -76,6 +78,13 @@ class AttachSequence {
 
 // Uniform in [0, 1), from the raw engine (independent of the library's distributions).
 inline double uniform01(Random& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
+
+// A standard normal deviate by Box–Muller on two uniform01 draws (u₁ = 1 − first ∈ (0, 1]):
+// the same numbers on every platform, which the library's distributions do not promise.
+inline double standard_normal(Random& rng) {
+  const double u1 = 1.0 - uniform01(rng), u2 = uniform01(rng);
+  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * std::numbers::pi * u2);
+}
 
 // n points of [0, 1)^dim: from the attached sequence, else engine draws row by row.
 Eigen::MatrixXd unit_points(Random& rng, Eigen::Index n, int dim);
