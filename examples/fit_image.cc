@@ -18,6 +18,7 @@
 #include <filesystem>
 
 #include "fields/field.h"
+#include "io/image_file.h"
 #include "io/png_image.h"
 #include "solvers/training/adam.h"
 
@@ -58,8 +59,8 @@ int main(int argc, char** argv) {
   int steps = 500, crop = 0;
   double lr = 1e-4, min_psnr = 0;
   std::vector<int> hidden{256, 256, 256, 256};
-  CLI::App app{"Fit a SIREN to a PNG image and write its gradient and Laplacian"};
-  app.add_option("image", image_path, "PNG image")->required()->check(CLI::ExistingFile);
+  CLI::App app{"Fit a SIREN to a PNG or WebP picture and write its gradient and Laplacian"};
+  app.add_option("image", image_path, "PNG or WebP picture")->required()->check(CLI::ExistingFile);
   app.add_option("--steps", steps, "Adam steps")->check(CLI::Range(1, 1000000))->capture_default_str();
   app.add_option("--crop", crop, "Use the central crop of this many pixels (0: whole image)")->capture_default_str();
   app.add_option("--lr", lr, "Learning rate")->check(CLI::PositiveNumber)->capture_default_str();
@@ -69,7 +70,7 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   // 1. The image as grey values in [0, 1] (the central crop if asked).
-  const io::Image image = io::read_png(image_path);
+  const io::Image image = io::read_image(image_path);
   const int size_x = crop > 0 ? std::min(crop, image.width) : image.width;
   const int size_y = crop > 0 ? std::min(crop, image.height) : image.height;
   const int x0 = (image.width - size_x) / 2, y0 = (image.height - size_y) / 2;

@@ -10,8 +10,9 @@ packages=(
   libeigen3-dev libceres-dev libvtk9-dev libhdf5-dev libyaml-cpp-dev
   libgtest-dev libgmock-dev libbenchmark-dev libmuparser-dev libomp-dev libcli11-dev nlohmann-json3-dev
   python3-h5py python3-dev python3-numpy python3-pybind11 python3-scipy python3-skimage
-  libboost-dev libsndfile1-dev libopenblas-openmp-dev
+  libboost-dev libsndfile1-dev libwebp-dev libopenblas-openmp-dev
   libopenmpi-dev openmpi-bin
+  gnome-backgrounds  # data: the 4096² picture of configs/fit_image_acorn.yaml (data/SOURCES.md)
 )
 if [[ "${NFIELD_WITH_TORCH:-0}" == 1 ]]; then
   packages+=(python3 python3-torch python3-numpy python3-pil libopenblas0-openmp)

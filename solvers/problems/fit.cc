@@ -7,11 +7,11 @@
 //   problem: fit
 //   equation:
 //     signal: image                   # image | audio | video
-//     path: ../data/images/camera.png # relative to the config file: a PNG (image), a sound
+//     path: ../data/images/camera.png # relative to the config file: a PNG or WebP (image), a sound
 //                                     # file read by libsndfile (audio), or a folder of
-//                                     # same-sized PNG frames taken in file-name order (video)
+//                                     # same-sized PNG/WebP frames in file-name order (video)
 //     channels: auto                  # image, video: auto | grey | rgb (auto: grey for a
-//                                     #   grey PNG, else RGB; alpha is dropped)
+//                                     #   grey picture, else RGB; alpha is dropped)
 //     crop: 256                       # image, video: the central crop, n or [width, height]
 //     frames: 32                      # video: the first n frames of the folder
 //     seconds: [0.5, 2.5]             # audio: that part of the clip
@@ -57,11 +57,13 @@
 #include <vector>
 
 #include "io/audio.h"
+#include "io/image_file.h"
 #include "io/image_metrics.h"
 #include "io/line_plot.h"
 #include "io/png_image.h"
 #include "io/text.h"
 #include "solvers/core/problem_capabilities.h"
+#include "solvers/core/slice_progress.h"
 #include "solvers/problems/image_family.h"
 #include "solvers/problems/problems.h"
 
@@ -198,6 +200,12 @@ class Fit final : public Problem, public ReportsProgress, public HasInstances {
     };
     const bool ssim_possible = signal_.width >= 11 && signal_.height >= 11;
     if (signal_.kind == Kind::kImage) {
+      // SSIM and the two pictures take about 20 s at 4096²: say so rather than look hung.
+      const bool large = frame > (Eigen::Index{1} << 22);
+      if (large) {
+        std::printf("fit: SSIM and reconstruction.png, error.png of %ld pixels\n", static_cast<long>(frame));
+        std::fflush(stdout);
+      }
       if (ssim_possible) metrics.emplace_back("ssim", io::ssim(reconstruction, signal_.values, signal_.width, signal_.height));
       io::write_png(context.dir / "reconstruction.png", picture(0));
       io::write_scalar_png(context.dir / "error.png", error_map(0), error_colours);
@@ -294,7 +302,7 @@ class Fit final : public Problem, public ReportsProgress, public HasInstances {
     equation.require("time_scale", time_scale_ > 0 && time_scale_ <= 1e6, "expected a number in (0, 1e6]");
   }
 
-  // An image, or a video's frames: the PNG files of a folder in name order.
+  // An image, or a video's frames: the PNG or WebP files of a folder in name order.
   void read_pictures(const io::ConfigNode& equation, const fs::path& path) {
     const bool video = signal_.kind == Kind::kVideo;
     const std::string channels = equation.get_choice("channels", {"auto", "grey", "rgb"}, "auto");
@@ -310,16 +318,16 @@ class Fit final : public Problem, public ReportsProgress, public HasInstances {
     } else {
       std::error_code ec;
       if (!fs::is_directory(path, ec))
-        throw equation.error("path", path.string() + ": expected a folder of PNG frames");
+        throw equation.error("path", path.string() + ": expected a folder of PNG or WebP frames");
       for (const auto& entry : fs::directory_iterator(path, ec)) {
-        if (entry.is_regular_file() && io::to_lower(entry.path().extension().string()) == ".png") files.push_back(entry.path());
+        if (entry.is_regular_file() && io::is_image_file_name(entry.path())) files.push_back(entry.path());
       }
       if (ec) throw equation.error("path", path.string() + ": cannot list the folder: " + ec.message());
-      if (files.empty()) throw equation.error("path", path.string() + ": no PNG frames (*.png) in the folder");
+      if (files.empty()) throw equation.error("path", path.string() + ": no frames (*.png, *.webp) in the folder");
       std::sort(files.begin(), files.end());
       if (frames > 0) {
         equation.require("frames", frames <= static_cast<int>(files.size()),
-                         "expected at most " + std::to_string(files.size()) + " (the PNG files in " +
+                         "expected at most " + std::to_string(files.size()) + " (the frames in " +
                              path.string() + ")");
         files.resize(static_cast<size_t>(frames));
       }
@@ -329,7 +337,7 @@ class Fit final : public Problem, public ReportsProgress, public HasInstances {
     for (const fs::path& file : files) {
       io::Image image;
       try {
-        image = io::read_png(file);
+        image = io::read_image(file);
       } catch (const std::exception& e) {
         throw equation.error("path", e.what());
       }
@@ -386,16 +394,42 @@ class Fit final : public Problem, public ReportsProgress, public HasInstances {
     return (f * signal_.height + r) * signal_.width + c;
   }
 
-  // The field at every sample (n × channels), a slice at a time.
+  // The field at every sample (n × channels), a slice at a time, with a progress line every
+  // 5 s (a 4096² picture takes tens of seconds). Pictures and frames go in square tiles of
+  // kTile² pixels, rows within a tile, so that a pass of points stays within one or two of a
+  // block field's blocks (ACORN evaluates its encoder once per block a pass touches: in
+  // picture rows a 4096² evaluation took 2.4× as long).
   Eigen::MatrixXd evaluate_all(const OutputContext& context) const {
-    const Eigen::Index n = signal_.size(), slice = 1 << 18;
+    constexpr int kTile = 256;
+    const Eigen::Index n = signal_.size();
     Eigen::MatrixXd out(n, signal_.channels);
-    for (Eigen::Index first = 0; first < n; first += slice) {
-      const Eigen::Index count = std::min(slice, n - first);
-      out.middleRows(first, count) =
-          context.values(coordinates(Eigen::VectorXi::LinSpaced(count, static_cast<int>(first),
-                                                               static_cast<int>(first + count - 1))));
+    SliceProgress progress("fit: the field at all " + std::to_string(n) + " samples");
+    const auto evaluate = [&](const Eigen::VectorXi& index, Eigen::Index done) {
+      const Eigen::MatrixXd values = context.values(coordinates(index));
+      for (Eigen::Index k = 0; k < index.size(); ++k) out.row(index(k)) = values.row(k);
+      progress.advance(done, n);
+    };
+    if (signal_.kind == Kind::kAudio) {
+      constexpr Eigen::Index kSlice = 1 << 18;
+      for (Eigen::Index first = 0; first < n; first += kSlice) {
+        const Eigen::Index count = std::min(kSlice, n - first);
+        evaluate(Eigen::VectorXi::LinSpaced(count, static_cast<int>(first), static_cast<int>(first + count - 1)),
+                 first + count);
+      }
+      return out;
     }
+    const int w = signal_.width, h = signal_.height;
+    Eigen::Index done = 0;
+    for (int f = 0; f < signal_.frames; ++f)
+      for (int top = 0; top < h; top += kTile)
+        for (int left = 0; left < w; left += kTile) {
+          const int rows = std::min(kTile, h - top), columns = std::min(kTile, w - left);
+          Eigen::VectorXi index(static_cast<Eigen::Index>(rows) * columns);
+          for (int r = 0; r < rows; ++r)
+            for (int c = 0; c < columns; ++c) index(r * columns + c) = (f * h + top + r) * w + left + c;
+          done += index.size();
+          evaluate(index, done);
+        }
     return out;
   }
 

@@ -5,6 +5,7 @@
 #include <optional>
 #include <utility>
 
+#include "io/image_file.h"
 #include "io/text.h"
 
 namespace nfield::solvers {
@@ -23,13 +24,13 @@ std::vector<fs::path> family_files(const io::ConfigNode& family, const fs::path&
   const fs::path folder = config_dir / family.get<std::string>("images");
   std::error_code ec;
   if (!fs::is_directory(folder, ec))
-    throw family.error("images", folder.string() + ": expected a folder of PNG pictures or a list of files");
+    throw family.error("images", folder.string() + ": expected a folder of PNG or WebP pictures or a list of files");
   for (const auto& entry : fs::directory_iterator(folder, ec))
-    if (entry.is_regular_file() && io::to_lower(entry.path().extension().string()) == ".png")
+    if (entry.is_regular_file() && io::is_image_file_name(entry.path()))
       files.push_back(entry.path());
   if (ec) throw family.error("images", folder.string() + ": cannot list the folder: " + ec.message());
   std::sort(files.begin(), files.end());
-  family.require("images", files.size() >= 2, folder.string() + ": expected at least two PNG pictures (*.png)");
+  family.require("images", files.size() >= 2, folder.string() + ": expected at least two pictures (*.png, *.webp)");
   return files;
 }
 
@@ -92,7 +93,7 @@ ImageFamily read_image_family(const io::ConfigNode& family, const fs::path& conf
     const fs::path& file = files[k];
     io::Image image;
     try {
-      image = io::read_png(file);
+      image = io::read_image(file);
     } catch (const std::exception& e) {
       throw family.error("images", e.what());
     }

@@ -48,7 +48,6 @@
 // chamfer_mean_per_diagonal, chamfer_max_per_diagonal and normal_consistency against the mesh
 // (io/mesh_distance.h).
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -65,6 +64,7 @@
 #include "io/vtk_polydata.h"
 #include "solvers/core/jet_residual.h"
 #include "solvers/core/problem_capabilities.h"
+#include "solvers/core/slice_progress.h"
 #include "solvers/geometry/mesh_shape.h"
 #include "solvers/problems/problems.h"
 #include "solvers/problems/shape_placement.h"
@@ -151,31 +151,22 @@ class Occupancy final : public Problem, public ReportsProgress {
   }
 
   void write_outputs(const OutputContext& context, std::vector<std::pair<std::string, double>>& metrics) const override {
-    const auto started = std::chrono::steady_clock::now();
     const int n = iou_resolution_;
     const io::Grid grid = io::make_grid(domain_.lower(), domain_.upper(), {n, n, n});
     const Eigen::MatrixXd x = grid.points(3);
     Eigen::VectorXd u(x.rows());
     constexpr Eigen::Index kSlice = 1 << 18;
-    double shown = 0;
+    SliceProgress progress("occupancy: the field on the " + std::to_string(n) + "^3 grid");
     for (Eigen::Index first = 0; first < x.rows(); first += kSlice) {
       const Eigen::Index count = std::min(kSlice, x.rows() - first);
       u.segment(first, count) = context.values(x.middleRows(first, count)).col(0);
-      const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-      if (seconds - shown >= 5 && first + count < x.rows()) {
-        shown = seconds;
-        const double done = static_cast<double>(first + count) / static_cast<double>(x.rows());
-        std::printf("occupancy: the field on the %d^3 grid, %.0f %% (%.0f s, ETA %.0f s)\n", n, 100 * done, seconds,
-                    seconds * (1 - done) / done);
-        std::fflush(stdout);
-      }
+      progress.advance(first + count, x.rows());
     }
     const Agreement a = agreement(u, io::inside_closed_mesh(grid, shape_->mesh()));
     metrics.emplace_back("iou", a.iou());
     metrics.emplace_back("occupancy_accuracy", a.accuracy());
     metrics.emplace_back("iou_resolution", n);
-    metrics.emplace_back("iou_seconds",
-                         std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
+    metrics.emplace_back("iou_seconds", progress.seconds());
     std::printf("IoU %.5f on %d^3 points (accuracy %.5f)\n", a.iou(), n, a.accuracy());
     write_surface(context, grid, u, metrics);
   }

@@ -56,6 +56,7 @@
 #include <optional>
 
 #include "io/bspline_image.h"
+#include "io/image_file.h"
 #include "io/image_metrics.h"
 #include "io/png_image.h"
 #include "solvers/problems/problems.h"
@@ -96,7 +97,7 @@ class PoissonImage final : public Problem {
     const int crop = equation.has("crop") ? equation.get_in_range("crop", 3, 1 << 16) : 0;
     io::Image image;
     try {
-      image = io::read_png(path);
+      image = io::read_image(path);
     } catch (const std::exception& e) {
       throw equation.error("image", e.what());
     }

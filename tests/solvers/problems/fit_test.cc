@@ -243,9 +243,9 @@ TEST(Fit, AFolderWithoutFramesOrNoFolderIsRejected) {
   const fs::path config = bad_config("  signal: video\n  path: frames\n");
   fs::create_directories(config.parent_path() / "frames");
   std::ofstream(config.parent_path() / "frames/readme.txt") << "no frames\n";
-  expect_located_error(config, {4, 9, "equation.path", "no PNG frames"});
+  expect_located_error(config, {4, 9, "equation.path", "no frames (*.png, *.webp)"});
   const fs::path file = bad_config("  signal: video\n  path: " + kCamera.string() + "\n");
-  expect_located_error(file, {4, 9, "equation.path", "expected a folder of PNG frames"});
+  expect_located_error(file, {4, 9, "equation.path", "expected a folder of PNG or WebP frames"});
 }
 
 }  // namespace

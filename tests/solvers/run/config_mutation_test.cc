@@ -321,6 +321,7 @@ int sample_stride(const std::string& config) {
       {"allen_cahn_1d", 4},       // ~0.13 s (the ETDRK4 reference)
       {"sdf_kitten", 16},         // ~140 ms
       {"fit_video", 8},           // ~80 ms
+      {"fit_image_acorn", 128},   // ~1 s (a 4096² WebP picture)
       {"autoint_bunny", 8},       // ~40 ms
       {"nerf_bunny", 8},          // ~30 ms (posed images)
       {"nerf_bunny_hash_grid", 8},
