@@ -19,6 +19,7 @@
 #include "apps/gemm_rate.h"
 #include "apps/nerf_bench.h"
 #include "apps/problem_bench.h"
+#include "autodiff/small_gemm.h"
 #include "fields/field.h"
 #include "solvers/training/adam.h"
 
@@ -162,9 +163,9 @@ void run_table(const BenchOptions& options, double peak, std::vector<std::string
   std::string widths;
   for (int h : options.hidden) widths += (widths.empty() ? "" : "x") + std::to_string(h);
   if (!options.json_only)
-    std::printf("SIREN %s, float, %d threads, block %ld points, FMA peak %.1f GFLOP/s\n"
+    std::printf("SIREN %s, float (layer products: %s), %d threads, block %ld points, FMA peak %.1f GFLOP/s\n"
                 "%-11s %4s %7s %12s %9s %10s %7s %7s %9s\n",
-                widths.c_str(), threads, options.block, peak, "op", "dims", "batch", "step ms", "GFLOP/s",
+                widths.c_str(), autodiff::small_gemm_kernel_name(), threads, options.block, peak, "op", "dims", "batch", "step ms", "GFLOP/s",
                 "GEMM GF/s", "ratio", "peak", "peak MB");
   for (const std::string& op : options.ops)
     for (long batch : options.batches) {

@@ -1,10 +1,37 @@
 // SPDX-License-Identifier: MIT
 #include "fields/dense.h"
 
+#include <type_traits>
+
+#include "autodiff/small_gemm.h"
+
 namespace nfield::fields {
 
+using autodiff::GemmOp;
 using autodiff::Matrix;
 using autodiff::Vector;
+
+namespace {
+
+// C ← β C + op(A) op(B), β = 0 or 1: float through the small-network kernel
+// (autodiff/small_gemm.h) at the shapes where it pays, otherwise and in double through Eigen.
+template <typename Scalar, typename A, typename B, typename C>
+void product(GemmOp op_a, GemmOp op_b, const A& a, const B& b, Scalar beta, C& c) {
+  const Eigen::Index k = op_a == GemmOp::kNone ? a.cols() : a.rows();
+  if (std::is_same_v<Scalar, float> && autodiff::small_gemm_pays(c.rows(), c.cols(), k)) {
+    if constexpr (std::is_same_v<Scalar, float>)
+      autodiff::small_gemm(op_a, op_b, c.rows(), c.cols(), k, a.data(), a.outerStride(), b.data(), b.outerStride(),
+                           beta, c.data(), c.outerStride());
+  } else if (op_a == GemmOp::kTranspose) {
+    c.noalias() += a.transpose() * b;  // the one transposed-A use, W̄ += Z̄ᵀ A, accumulates
+  } else if (op_b == GemmOp::kTranspose) {
+    c.noalias() = a * b.transpose();
+  } else {
+    c.noalias() = a * b;
+  }
+}
+
+}  // namespace
 
 template <typename Scalar>
 void Dense<Scalar>::forward(const autodiff::StreamLayout&, const Scalar* params,
@@ -13,7 +40,7 @@ void Dense<Scalar>::forward(const autodiff::StreamLayout&, const Scalar* params,
   const Eigen::Map<const Matrix<Scalar>> weight(params, out_, in_);
   const Eigen::Map<const Vector<Scalar>> bias(params + out_ * in_, out_);
   out.resize(in.points, in.count, out_);
-  out.data.noalias() = in.data * weight.transpose();
+  product<Scalar>(GemmOp::kNone, GemmOp::kTranspose, in.data, weight, 0, out.data);
   out.values().rowwise() += bias.transpose();
 }
 
@@ -26,11 +53,11 @@ void Dense<Scalar>::backward(const autodiff::StreamLayout&, const Scalar* params
   const Eigen::Map<const Matrix<Scalar>> weight(params, out_, in_);
   Eigen::Map<Matrix<Scalar>> weight_bar(gradient, out_, in_);
   Eigen::Map<Vector<Scalar>> bias_bar(gradient + out_ * in_, out_);
-  weight_bar.noalias() += out_adjoint.data.transpose() * in.data;
+  product<Scalar>(GemmOp::kTranspose, GemmOp::kNone, out_adjoint.data, in.data, 1, weight_bar);
   bias_bar += out_adjoint.values().colwise().sum().transpose();
   if (in_adjoint) {
     in_adjoint->resize(in.points, in.count, in_);
-    in_adjoint->data.noalias() = out_adjoint.data * weight;
+    product<Scalar>(GemmOp::kNone, GemmOp::kNone, out_adjoint.data, weight, 0, in_adjoint->data);
   }
 }
 
@@ -57,7 +84,7 @@ void Dense<Scalar>::backward_per_point(const autodiff::StreamLayout&, const Scal
   if (in_adjoint) {
     const Eigen::Map<const Matrix<Scalar>> weight(params, out_, in_);
     in_adjoint->resize(in.points, in.count, in_);
-    in_adjoint->data.noalias() = out_adjoint.data * weight;
+    product<Scalar>(GemmOp::kNone, GemmOp::kNone, out_adjoint.data, weight, 0, in_adjoint->data);
   }
 }
 
