@@ -106,7 +106,12 @@ class Relu final : public ElementwiseFunction<Scalar> {
                    std::vector<Matrix<Scalar>>& tables) const override {
     size_tables(tables, max_order, z);
     tables[0].array() = z.array().max(Scalar(0));
-    if (max_order >= 1) tables[1].array() = (z.array() > Scalar(0)).template cast<Scalar>();
+    if (max_order >= 1)  // a plain loop: Eigen does not vectorise a cast of a comparison
+      for (Eigen::Index j = 0; j < z.cols(); ++j) {
+        const Scalar* in = z.col(j).data();
+        Scalar* step = tables[1].col(j).data();
+        for (Eigen::Index i = 0; i < z.rows(); ++i) step[i] = in[i] > Scalar(0) ? Scalar(1) : Scalar(0);
+      }
     for (int m = 2; m <= max_order; ++m) tables[m].setZero();
   }
 };
