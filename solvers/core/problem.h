@@ -44,6 +44,9 @@ struct OutputContext {
   int output_scale = 0;
   std::function<Eigen::MatrixXd(const Eigen::MatrixXd&, int)> scale_values{};
   Eigen::MatrixXd scale_cutoffs{};
+  // For write_outputs: training ended with a completed stage, so the field is the one that
+  // the last reported_error evaluated, and a problem may reuse what it evaluated there.
+  bool field_as_last_reported = false;
 };
 
 // What `nfield render` asks of a problem whose field renders images: the cameras of a

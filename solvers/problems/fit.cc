@@ -157,9 +157,12 @@ class Fit final : public Problem, public ReportsProgress, public HasInstances {
   }
 
   // rel_l2 over every sample, after each stage.
+  // The evaluation is kept for write_outputs, which reuses it when the field has not changed
+  // since (OutputContext::field_as_last_reported): one pass over every sample instead of two
+  // (28 s of ACORN at 4096², 2 minutes of a SIREN). Until then it holds n × channels doubles.
   std::optional<double> reported_error(const OutputContext& context) const override {
-    const Eigen::MatrixXd fitted = evaluate_all(context);
-    return (fitted - signal_.values.cast<double>()).norm() / signal_.values.cast<double>().norm();
+    last_evaluation_ = evaluate_all(context);
+    return (*last_evaluation_ - signal_.values.cast<double>()).norm() / signal_.values.cast<double>().norm();
   }
 
   std::vector<std::pair<std::string, double>> progress_metrics(const OutputContext& context,
@@ -173,7 +176,9 @@ class Fit final : public Problem, public ReportsProgress, public HasInstances {
 
   void write_outputs(const OutputContext& context,
                      std::vector<std::pair<std::string, double>>& metrics) const override {
-    Eigen::MatrixXd fitted = evaluate_all(context);
+    Eigen::MatrixXd fitted =
+        context.field_as_last_reported && last_evaluation_ ? std::move(*last_evaluation_) : evaluate_all(context);
+    last_evaluation_.reset();
     const Eigen::MatrixXd target = signal_.values.cast<double>();
     metrics.emplace_back("rel_l2", (fitted - target).norm() / target.norm());
     const double low = signal_.kind == Kind::kAudio ? -1.0 : 0.0;
@@ -502,6 +507,7 @@ class Fit final : public Problem, public ReportsProgress, public HasInstances {
   std::size_t training_count_ = 0;
   double time_scale_ = 1.0;
   Eigen::VectorXi progress_samples_;
+  mutable std::optional<Eigen::MatrixXd> last_evaluation_;  // reported_error's, for write_outputs
 };
 
 }  // namespace

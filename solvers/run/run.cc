@@ -263,7 +263,9 @@ int train_and_write(RunSetup& setup, const std::filesystem::path& resume) {
           ? write_grid_outputs(*setup.problem, solution.streams, setup.output, &context)
           : GridMetrics{};
   std::vector<std::pair<std::string, double>> extra;
-  setup.problem->write_outputs(context, extra);
+  OutputContext final_context = context;
+  final_context.field_as_last_reported = finished;  // the trainer reports an error only at a completed stage's end
+  setup.problem->write_outputs(final_context, extra);
   write_block_outputs(field.options(), dir);  // an acorn field's blocks (blocks.vtp)
 
   nlohmann::ordered_json metrics =

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <string>
@@ -195,6 +196,44 @@ training:
     EXPECT_EQ(frame.channels, 3);
     EXPECT_TRUE(fs::exists(out / "frames" / ("error_00" + std::to_string(f) + ".png")));
   }
+}
+
+// write_outputs reuses the last reported_error's pass over every sample when the run says
+// the field has not changed since, and evaluates anew otherwise; the metrics agree.
+TEST(Fit, OutputsReuseTheLastStageEvaluationOnlyWhenTheFieldIsUnchanged) {
+  const fs::path config = write_config("fit", R"yaml(
+problem: fit
+equation: {signal: image, path: frame.png}
+training: {batch: {interior: 16}, stages: [{optimizer: adam, steps: 1}]}
+)yaml");
+  io::write_png(config.parent_path() / "frame.png", test_picture(5, 4, 1));
+  const RunSetup setup = load_run(config, {});
+  int evaluations = 0;
+  OutputContext context;
+  context.dir = config.parent_path() / "outputs";
+  fs::create_directories(context.dir);
+  context.values = [&](const Eigen::MatrixXd& x) {
+    ++evaluations;
+    return Eigen::MatrixXd(Eigen::MatrixXd::Constant(x.rows(), 3, 0.5));
+  };
+  const double reported = setup.problem->reported_error(context).value();
+  ASSERT_EQ(evaluations, 1);
+
+  const auto rel_l2 = [&](const OutputContext& c) {
+    std::vector<std::pair<std::string, double>> metrics;
+    setup.problem->write_outputs(c, metrics);
+    for (const auto& [name, value] : metrics)
+      if (name == "rel_l2") return value;
+    return std::numeric_limits<double>::quiet_NaN();
+  };
+  OutputContext unchanged = context;
+  unchanged.field_as_last_reported = true;
+  EXPECT_DOUBLE_EQ(rel_l2(unchanged), reported);
+  EXPECT_EQ(evaluations, 1);
+  EXPECT_DOUBLE_EQ(rel_l2(unchanged), reported);  // the kept pass is used once, then evaluated anew
+  EXPECT_EQ(evaluations, 2);
+  EXPECT_DOUBLE_EQ(rel_l2(context), reported);
+  EXPECT_EQ(evaluations, 3);
 }
 
 // ---- bad inputs, each located at its key ----------------------------------------------
