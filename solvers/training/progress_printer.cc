@@ -139,6 +139,15 @@ void ProgressPrinter::print_step(const Progress& p) {
 
 void ProgressPrinter::print_running(Clock::time_point now) {
   const double running = std::chrono::duration<double>(now - step_started_).count();
+  if (last_.step >= last_.total_steps) {  // the stage's steps are done; what follows its last is not a step
+    std::fprintf(options_.out,
+                 "%sstep %ld/%ld [%s] done, the stage's last: %s since, in its checkpoint and error | loss %.3e%s",
+                 tty_ ? "\r\033[K" : "", last_.step, last_.total_steps, last_.optimizer.c_str(),
+                 duration_text(running).c_str(), last_.loss, tty_ ? "" : "\n");
+    std::fflush(options_.out);
+    open_line_ = tty_;
+    return;
+  }
   std::string last_step;
   if (last_step_seconds_ > 0) last_step = ", last step " + duration_text(last_step_seconds_);
   std::fprintf(options_.out, "%sstep %ld/%ld [%s] running for %s%s | loss %.3e%s",

@@ -117,6 +117,23 @@ TEST(ProgressPrinter, ALongStepStillPrintsLines) {
   std::fclose(f);
 }
 
+// After a stage's last step (its error being evaluated, a checkpoint written) the lines say
+// so instead of announcing a step past the last.
+TEST(ProgressPrinter, TimeAfterAStagesLastStepIsNotCalledAStep) {
+  std::FILE* f = std::tmpfile();
+  ASSERT_NE(f, nullptr);
+  {
+    ProgressPrinter printer({.log_every = 100, .interval = 0.2, .out = f, .terminal = false});
+    printer.stage_begins(lm_progress(999));
+    printer.step(lm_progress(1000));
+    std::this_thread::sleep_for(std::chrono::milliseconds(750));
+  }
+  const std::string text = contents(f);
+  EXPECT_GE(count(text, "step 1000/1000 [lm] done, the stage's last:"), 2) << text;
+  EXPECT_EQ(count(text, "1001/1000"), 0) << text;
+  std::fclose(f);
+}
+
 TEST(ProgressPrinter, SlowStepsPrintByTimeAndFastOnesEveryLogEvery) {
   std::FILE* f = std::tmpfile();
   ASSERT_NE(f, nullptr);
