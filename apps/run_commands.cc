@@ -156,7 +156,7 @@ void add_run_commands(CLI::App& app) {
   });
 
   auto eval = std::make_shared<EvalArguments>();
-  CLI::App* eval_command = app.add_subcommand("eval", "Sample a checkpoint's field onto a grid and write VTK and metrics.json");
+  CLI::App* eval_command = app.add_subcommand("eval", "Sample a checkpoint's field onto a grid and write VTK and metrics.json (a fit: its signal's outputs again)");
   eval_command->add_option("checkpoint", eval->checkpoint, "A checkpoint.h5 from nfield run")
       ->required()
       ->check(CLI::ExistingFile)

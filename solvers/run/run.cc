@@ -540,14 +540,16 @@ nlohmann::ordered_json evaluate_checkpoint(const std::filesystem::path& checkpoi
                                 "outputs per instance are in its run's training/ and held_out/ folders, and "
                                 "`nfield fit-code` fits codes to new signals");
   setup.output.grid.assign(setup.problem->domain().space_dim(), grid_points);
+  if (capability<RendersViews>(*setup.problem))
+    throw std::runtime_error(checkpoint.string() + ": problem '" + setup.root.get<std::string>("problem") +
+                             "' renders views instead of a grid: `nfield render " + checkpoint.string() + "`");
   const fields::Field<double> field = fields::load_field<double>(file);
-  if (!setup.problem->writes_grid_outputs())
-    throw std::runtime_error(checkpoint.string() + ": problem '" +
-                             setup.root.get<std::string>("problem") +
-                             "' has no grid outputs to evaluate");
   const Solution solution = make_solution(field, setup.problem->ansatz());
   const OutputContext context = output_context(out_dir, solution, setup, field);
-  const GridMetrics grid = write_grid_outputs(*setup.problem, solution.streams, setup.output, &context);
+  // A problem without grid outputs (a fit) writes only its own: the signal at its samples.
+  const GridMetrics grid = setup.problem->writes_grid_outputs()
+                               ? write_grid_outputs(*setup.problem, solution.streams, setup.output, &context)
+                               : GridMetrics{};
   std::vector<std::pair<std::string, double>> extra;
   setup.problem->write_outputs(context, extra);  // a reference.file's errors, printed as the run prints them
   nlohmann::ordered_json metrics = eval_metrics(setup, grid, extra);

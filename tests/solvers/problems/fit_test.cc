@@ -130,6 +130,13 @@ training:
   EXPECT_EQ(reconstruction.height, 32);
   EXPECT_EQ(reconstruction.channels, 1);
   EXPECT_TRUE(fs::exists(out / "error.png"));
+
+  // `nfield eval` of the checkpoint: the same outputs from the field evaluated in double.
+  const nlohmann::ordered_json evaluated = evaluate_checkpoint(out / "checkpoint.h5", 8, out / "eval");
+  EXPECT_NEAR(evaluated["psnr_db"].get<double>(), metrics["psnr_db"].get<double>(), 0.01);
+  EXPECT_NEAR(evaluated["rel_l2"].get<double>(), metrics["rel_l2"].get<double>(), 1e-4);
+  EXPECT_TRUE(fs::exists(out / "eval" / "reconstruction.png"));
+  EXPECT_TRUE(fs::exists(out / "eval" / "metrics.json"));
 }
 
 TEST(Fit, AudioFitWritesAWavOfTheClipsRateAndLength) {
