@@ -165,8 +165,8 @@ void run_table(const BenchOptions& options, double peak, std::vector<std::string
   if (!options.json_only)
     std::printf("SIREN %s, float (layer products: %s), %d threads, block %ld points, FMA peak %.1f GFLOP/s\n"
                 "%-11s %4s %7s %12s %9s %10s %7s %7s %9s\n",
-                widths.c_str(), autodiff::small_gemm_kernel_name(), threads, options.block, peak, "op", "dims", "batch", "step ms", "GFLOP/s",
-                "GEMM GF/s", "ratio", "peak", "peak MB");
+                widths.c_str(), autodiff::small_gemm_kernel_name(), threads, options.block, peak, "op", "dims",
+                "batch", "step ms", "GFLOP/s", "GEMM GF/s", "ratio", "peak", "peak MB");
   for (const std::string& op : options.ops)
     for (long batch : options.batches) {
       const StepResult r = bench_step(options, op, batch);

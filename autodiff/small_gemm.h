@@ -11,8 +11,8 @@
 //   weights        W̄ += Z̄ᵀ A     small_gemm(kTranspose, kNone, …, β = 1).
 //
 // Why not Eigen's product: at the shapes of these layers (k and n of 16–256, m of a block of
-// 128 points times its streams) Eigen's float product runs at 40–55 % of the float FMA peak
-// on an AVX2 core; this one at about 75–85 % (docs/experiments.md, 2026-11-28).
+// 128 points times its streams) Eigen's float product leaves about half of an AVX2 core's FMA
+// rate unused; the measured rates of both are in docs/experiments.md (2026-11-28).
 //
 // Method (the Goto/BLIS scheme): op(B) is copied in blocks of kc × nc into panels of nr
 // columns laid out k-major (nr consecutive floats per k), op(A) in blocks of mc × kc into

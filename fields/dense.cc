@@ -18,17 +18,18 @@ namespace {
 template <typename Scalar, typename A, typename B, typename C>
 void product(GemmOp op_a, GemmOp op_b, const A& a, const B& b, Scalar beta, C& c) {
   const Eigen::Index k = op_a == GemmOp::kNone ? a.cols() : a.rows();
-  if (std::is_same_v<Scalar, float> && autodiff::small_gemm_pays(c.rows(), c.cols(), k)) {
-    if constexpr (std::is_same_v<Scalar, float>)
-      autodiff::small_gemm(op_a, op_b, c.rows(), c.cols(), k, a.data(), a.outerStride(), b.data(), b.outerStride(),
-                           beta, c.data(), c.outerStride());
-  } else if (op_a == GemmOp::kTranspose) {
-    c.noalias() += a.transpose() * b;  // the one transposed-A use, W̄ += Z̄ᵀ A, accumulates
-  } else if (op_b == GemmOp::kTranspose) {
-    c.noalias() = a * b.transpose();
-  } else {
-    c.noalias() = a * b;
+  if constexpr (std::is_same_v<Scalar, float>) {
+    if (autodiff::small_gemm_pays(c.rows(), c.cols(), k))
+      return autodiff::small_gemm(op_a, op_b, c.rows(), c.cols(), k, a.data(), a.outerStride(), b.data(),
+                                  b.outerStride(), beta, c.data(), c.outerStride());
   }
+  const auto assign = [&](const auto& ab) {
+    if (beta == Scalar(0)) c.noalias() = ab;
+    else c.noalias() += ab;
+  };
+  if (op_a == GemmOp::kTranspose) assign(a.transpose() * b);
+  else if (op_b == GemmOp::kTranspose) assign(a * b.transpose());
+  else assign(a * b);
 }
 
 }  // namespace

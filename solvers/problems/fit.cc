@@ -156,10 +156,10 @@ class Fit final : public Problem, public ReportsProgress, public HasInstances {
     return {term};
   }
 
-  // rel_l2 over every sample, after each stage.
-  // The evaluation is kept for write_outputs, which reuses it when the field has not changed
-  // since (OutputContext::field_as_last_reported): one pass over every sample instead of two
-  // (28 s of ACORN at 4096², 2 minutes of a SIREN). Until then it holds n × channels doubles.
+  // rel_l2 over every sample, after each stage. The evaluation is kept for write_outputs,
+  // which reuses it when the field has not changed since (OutputContext::field_as_last_reported):
+  // one pass over every sample after training instead of two. Until then it holds n × channels
+  // doubles.
   std::optional<double> reported_error(const OutputContext& context) const override {
     last_evaluation_ = evaluate_all(context);
     return (*last_evaluation_ - signal_.values.cast<double>()).norm() / signal_.values.cast<double>().norm();
