@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "autodiff/elementwise.h"
 
+#include <algorithm>
 #include <stdexcept>
 #include <string>
 
@@ -49,34 +50,69 @@ std::vector<Scalar> inverse_factorials(int n) {
   return f;
 }
 
+// Columns per pass: the rules run over a few columns of every stream at a time, so that a
+// chunk's streams, tables and adjoints (a dozen arrays for a Laplacian) stay in L1/L2 across
+// the rules' passes instead of streaming each whole array from L3 once per pass.
+inline Eigen::Index chunk_columns(Eigen::Index points) {
+  return std::max<Eigen::Index>(1, 4096 / std::max<Eigen::Index>(points, 1));
+}
+
+// The reverse rule of operator stream q, on one chunk of columns (`part` selects it).
+template <typename Scalar, typename Part, typename Chunk, typename Accumulator, typename Scratch>
+void operator_backward(const StreamLayout& layout, int q, const Chunk& d1, const Chunk& d2, const Chunk& d3,
+                       const Part& part, const Streams<Scalar>& z, const Streams<Scalar>& y_adjoint,
+                       Accumulator& z0_bar, Streams<Scalar>& z_adjoint, Scratch acc) {
+  const auto yq_bar = part(y_adjoint.stream(layout.op(q)));
+  part(z_adjoint.stream(layout.op(q))) = d1 * yq_bar;
+  z0_bar += d2 * yq_bar * part(z.stream(layout.op(q)));
+  const auto& terms = layout.terms(q);
+  if (terms.empty()) return;
+  acc = Scalar(terms[0].coefficient) * part(z.stream(layout.tangent(terms[0].i))) *
+        part(z.stream(layout.tangent(terms[0].j)));
+  for (size_t t = 1; t < terms.size(); ++t)
+    acc += Scalar(terms[t].coefficient) * part(z.stream(layout.tangent(terms[t].i))) *
+           part(z.stream(layout.tangent(terms[t].j)));
+  z0_bar += d3 * yq_bar * acc;
+  acc = d2 * yq_bar;  // g = σ'' ȳ^[C], reused by every term
+  for (const OperatorTerm& term : terms) {
+    const Scalar c = Scalar(term.coefficient);
+    if (term.i == term.j) {
+      part(z_adjoint.stream(layout.tangent(term.i))) += (Scalar(2) * c) * acc * part(z.stream(layout.tangent(term.i)));
+    } else {
+      part(z_adjoint.stream(layout.tangent(term.i))) += c * acc * part(z.stream(layout.tangent(term.j)));
+      part(z_adjoint.stream(layout.tangent(term.j))) += c * acc * part(z.stream(layout.tangent(term.i)));
+    }
+  }
+}
+
 }  // namespace
 
 template <typename Scalar>
 void elementwise_forward(const StreamLayout& layout, const std::vector<Matrix<Scalar>>& tables,
                          const Streams<Scalar>& z, Streams<Scalar>& y) {
   require_tables(tables.size(), layout.forward_order() + 1, "elementwise_forward");
-  const Eigen::Index n = z.points, width = z.width();
+  const Eigen::Index n = z.points, width = z.width(), chunk = chunk_columns(n);
   y.resize(n, z.count, width);
-  y.values() = tables[0];
-  if (layout.count() == 1) return;
-  const auto d1 = tables[1].array();
-  for (int i = 0; i < layout.tangents(); ++i)
-    y.stream(layout.tangent(i)).array() = d1 * z.stream(layout.tangent(i)).array();
-  if (layout.operators() > 0) {
-    const auto d2 = tables[2].array();
-    Matrix<Scalar> quadratic(n, width);
+  Matrix<Scalar> quadratic(n, layout.operators() > 0 ? std::min(chunk, width) : 0);
+  for (Eigen::Index c0 = 0; c0 < width; c0 += chunk) {
+    const Eigen::Index w = std::min(chunk, width - c0);
+    auto part = [c0, w](auto&& m) { return m.middleCols(c0, w).array(); };
+    part(y.values()) = part(tables[0]);
+    if (layout.count() == 1) continue;
+    const auto d1 = part(tables[1]);
+    for (int i = 0; i < layout.tangents(); ++i) part(y.stream(layout.tangent(i))) = d1 * part(z.stream(layout.tangent(i)));
     for (int q = 0; q < layout.operators(); ++q) {
-      auto yq = y.stream(layout.op(q)).array();
-      yq = d1 * z.stream(layout.op(q)).array();
+      auto yq = part(y.stream(layout.op(q)));
+      yq = d1 * part(z.stream(layout.op(q)));
       const auto& terms = layout.terms(q);
       if (terms.empty()) continue;
-      auto acc = quadratic.array();
-      acc = Scalar(terms[0].coefficient) * z.stream(layout.tangent(terms[0].i)).array() *
-            z.stream(layout.tangent(terms[0].j)).array();
+      auto acc = quadratic.leftCols(w).array();
+      acc = Scalar(terms[0].coefficient) * part(z.stream(layout.tangent(terms[0].i))) *
+            part(z.stream(layout.tangent(terms[0].j)));
       for (size_t t = 1; t < terms.size(); ++t)
-        acc += Scalar(terms[t].coefficient) * z.stream(layout.tangent(terms[t].i)).array() *
-               z.stream(layout.tangent(terms[t].j)).array();
-      yq += d2 * acc;
+        acc += Scalar(terms[t].coefficient) * part(z.stream(layout.tangent(terms[t].i))) *
+               part(z.stream(layout.tangent(terms[t].j)));
+      yq += part(tables[2]) * acc;
     }
   }
   const int order = layout.taylor_order();
@@ -101,48 +137,25 @@ void elementwise_backward(const StreamLayout& layout, const std::vector<Matrix<S
                           const Streams<Scalar>& z, const Streams<Scalar>& y_adjoint,
                           Streams<Scalar>& z_adjoint) {
   require_tables(tables.size(), layout.forward_order() + 2, "elementwise_backward");
-  const Eigen::Index n = z.points, width = z.width();
+  const Eigen::Index n = z.points, width = z.width(), chunk = chunk_columns(n);
   z_adjoint.resize(n, z.count, width);
-  const auto d1 = tables[1].array();
-  auto z0_bar = z_adjoint.values().array();
-  z0_bar = d1 * y_adjoint.values().array();
-  if (layout.count() == 1) return;
-  const auto d2 = tables[2].array();
-  for (int i = 0; i < layout.tangents(); ++i) {
-    const auto yi_bar = y_adjoint.stream(layout.tangent(i)).array();
-    z_adjoint.stream(layout.tangent(i)).array() = d1 * yi_bar;
-    z0_bar += d2 * yi_bar * z.stream(layout.tangent(i)).array();
-  }
-  if (layout.operators() > 0) {
-    const auto d3 = tables[3].array();
-    Matrix<Scalar> scratch(n, width);
-    for (int q = 0; q < layout.operators(); ++q) {
-      const auto yq_bar = y_adjoint.stream(layout.op(q)).array();
-      z_adjoint.stream(layout.op(q)).array() = d1 * yq_bar;
-      z0_bar += d2 * yq_bar * z.stream(layout.op(q)).array();
-      const auto& terms = layout.terms(q);
-      if (terms.empty()) continue;
-      auto acc = scratch.array();
-      acc = Scalar(terms[0].coefficient) * z.stream(layout.tangent(terms[0].i)).array() *
-            z.stream(layout.tangent(terms[0].j)).array();
-      for (size_t t = 1; t < terms.size(); ++t)
-        acc += Scalar(terms[t].coefficient) * z.stream(layout.tangent(terms[t].i)).array() *
-               z.stream(layout.tangent(terms[t].j)).array();
-      z0_bar += d3 * yq_bar * acc;
-      acc = d2 * yq_bar;  // g = σ'' ȳ^[C], reused by every term
-      for (const OperatorTerm& term : terms) {
-        const Scalar c = Scalar(term.coefficient);
-        if (term.i == term.j) {
-          z_adjoint.stream(layout.tangent(term.i)).array() +=
-              (Scalar(2) * c) * acc * z.stream(layout.tangent(term.i)).array();
-        } else {
-          z_adjoint.stream(layout.tangent(term.i)).array() +=
-              c * acc * z.stream(layout.tangent(term.j)).array();
-          z_adjoint.stream(layout.tangent(term.j)).array() +=
-              c * acc * z.stream(layout.tangent(term.i)).array();
-        }
-      }
+  Matrix<Scalar> scratch(n, layout.operators() > 0 ? std::min(chunk, width) : 0);
+  for (Eigen::Index c0 = 0; c0 < width; c0 += chunk) {
+    const Eigen::Index w = std::min(chunk, width - c0);
+    auto part = [c0, w](auto&& m) { return m.middleCols(c0, w).array(); };
+    const auto d1 = part(tables[1]);
+    auto z0_bar = part(z_adjoint.values());
+    z0_bar = d1 * part(y_adjoint.values());
+    if (layout.count() == 1) continue;
+    const auto d2 = part(tables[2]);
+    for (int i = 0; i < layout.tangents(); ++i) {
+      const auto yi_bar = part(y_adjoint.stream(layout.tangent(i)));
+      part(z_adjoint.stream(layout.tangent(i))) = d1 * yi_bar;
+      z0_bar += d2 * yi_bar * part(z.stream(layout.tangent(i)));
     }
+    for (int q = 0; q < layout.operators(); ++q)
+      operator_backward(layout, q, d1, d2, part(tables[3]), part, z, y_adjoint, z0_bar, z_adjoint,
+                        scratch.leftCols(w).array());
   }
   const int order = layout.taylor_order();
   if (layout.taylor_dirs() == 0) return;

@@ -194,10 +194,10 @@ void small_gemm(GemmOp op_a, GemmOp op_b, Index m, Index n, Index k, const float
       for (Index ic = 0; ic < m; ic += kMc) {
         const Index mc = std::min(kMc, m - ic);
         pack(op_a == GemmOp::kNone, a, lda, ic, mc, pc, kc, kMr, packed_a.data());
-        for (Index jr = 0; jr < nc; jr += kNr) {
-          const float* b_panel = packed_b.data() + (jr / kNr) * kc * kNr;
-          for (Index ir = 0; ir < mc; ir += kMr) {
-            micro_kernel(kc, packed_a.data() + (ir / kMr) * kc * kMr, b_panel, std::min(kMr, mc - ir),
+        for (Index ir = 0; ir < mc; ir += kMr) {
+          const float* a_panel = packed_a.data() + (ir / kMr) * kc * kMr;
+          for (Index jr = 0; jr < nc; jr += kNr) {
+            micro_kernel(kc, a_panel, packed_b.data() + (jr / kNr) * kc * kNr, std::min(kMr, mc - ir),
                          std::min(kNr, nc - jr), block_beta, c + (ic + ir) + (jc + jr) * ldc, ldc);
           }
         }

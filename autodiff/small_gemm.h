@@ -22,7 +22,9 @@
 // values of B and issues (mr/8)·nr fused multiply-adds. With AVX2 and FMA: mr = 16, nr = 6,
 // twelve accumulators, and three registers left for the operands. The blocks (kc = 256,
 // mc = 128, nc = 264) keep A's block (128 KiB) and B's (264 KiB) in a 512 KiB L2 and one
-// panel of B (6 KiB) in L1 while the panels of A stream past it. Copying costs m·k + k·n
+// panel of A (16 KiB) in L1 while the panels of B stream past it: per k the kernel then
+// reads 24 bytes from L2 instead of the 64 of A's panel (BLIS's order; the other order, a
+// panel of B held in L1, was slower at every width, most at 16). Copying costs m·k + k·n
 // moves against 2 m n k flops: 1/32 of the arithmetic at n = 16, 1/512 at n = 256. The
 // weight gradient copies both operands across their storage order; those copies go through
 // 8 × 8 register transposes, without which they cost more than the products at width 16.
