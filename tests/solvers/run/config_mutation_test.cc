@@ -331,6 +331,10 @@ int sample_stride(const std::string& config) {
       {"nerf_bunny_recoloured", 8},
       {"poisson_image_laplacian", 4},  // ~18 ms
       {"poisson_family", 8},           // ~0.3 s (36 instances of 16-term expressions)
+      {"occupancy_bunny_acorn", 16},   // ~0.6 s (the mesh's closedness and self-intersection checks)
+      {"deepsdf_meshes", 16},          // ~0.2 s (five meshes)
+      {"navier_stokes_cylinder", 4},   // ~15 ms, but 1,276 mutants
+      {"burgers_identify", 4},         // ~22 ms (the measurements file)
   };
   const auto it = kSampleStride.find(config);
   return it == kSampleStride.end() ? 1 : it->second;
