@@ -24,8 +24,9 @@
 // mc = 128, nc = 264) keep A's block (128 KiB) and B's (264 KiB) in a 512 KiB L2 and one
 // panel of A (16 KiB) in L1 while the panels of B stream past it: per k the kernel then
 // reads 24 bytes from L2 instead of the 64 of A's panel (BLIS's order; the other order, a
-// panel of B held in L1, was slower at every width, most at 16). Copying costs m·k + k·n
-// moves against 2 m n k flops: 1/32 of the arithmetic at n = 16, 1/512 at n = 256. The
+// panel of B held in L1, was slower at narrow widths and no faster at wide ones;
+// docs/experiments.md, 2026-11-28, session 27). Copying costs m·k + k·n moves against
+// 2 m n k flops: 1/32 of the arithmetic at n = 16, 1/512 at n = 256. The
 // weight gradient copies both operands across their storage order; those copies go through
 // 8 × 8 register transposes, without which they cost more than the products at width 16.
 //
