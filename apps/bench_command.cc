@@ -181,7 +181,7 @@ void run_table(const BenchOptions& options, double peak, std::vector<std::string
       std::snprintf(line, sizeof line,
                     "{\"impl\": \"nfield\", \"op\": \"%s\", \"dims\": %d, \"batch\": %ld, \"hidden\": \"%s\", "
                     "\"median_step_ms\": %.3f, \"gflops\": %.2f, \"gemm_gflops\": %.2f, "
-                    "\"fma_peak_gflops\": %.2f, \"peak_share\": %.4f, \"peak_rss_mb\": %.1f, \"threads\": %d}",
+                    "\"fma_peak_gflops\": %.2f, \"peak_share\": %.4g, \"peak_rss_mb\": %.1f, \"threads\": %d}",
                     op.c_str(), dims, batch, widths.c_str(), r.median_ms, r.gflops, r.gemm_gflops, peak,
                     r.gflops / peak, r.peak_mb, threads);
       lines.push_back(line);
