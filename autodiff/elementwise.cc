@@ -57,30 +57,40 @@ inline Eigen::Index chunk_columns(Eigen::Index points) {
   return std::max<Eigen::Index>(1, 4096 / std::max<Eigen::Index>(points, 1));
 }
 
-// The reverse rule of operator stream q, on one chunk of columns (`part` selects it).
-template <typename Scalar, typename Part, typename Chunk, typename Accumulator, typename Scratch>
-void operator_backward(const StreamLayout& layout, int q, const Chunk& d1, const Chunk& d2, const Chunk& d3,
-                       const Part& part, const Streams<Scalar>& z, const Streams<Scalar>& y_adjoint,
-                       Accumulator& z0_bar, Streams<Scalar>& z_adjoint, Scratch acc) {
-  const auto yq_bar = part(y_adjoint.stream(layout.op(q)));
-  part(z_adjoint.stream(layout.op(q))) = d1 * yq_bar;
-  z0_bar += d2 * yq_bar * part(z.stream(layout.op(q)));
+// acc ← Σᵢⱼ Cᵢⱼ z⁽ⁱ⁾ ⊙ z⁽ʲ⁾ of operator stream q (its terms non-empty), on the chunk `part` selects.
+template <typename Scalar, typename Part, typename Scratch>
+void quadratic_terms(const StreamLayout& layout, int q, const Part& part, const Streams<Scalar>& z,
+                     Scratch& acc) {
   const auto& terms = layout.terms(q);
-  if (terms.empty()) return;
   acc = Scalar(terms[0].coefficient) * part(z.stream(layout.tangent(terms[0].i))) *
         part(z.stream(layout.tangent(terms[0].j)));
   for (size_t t = 1; t < terms.size(); ++t)
     acc += Scalar(terms[t].coefficient) * part(z.stream(layout.tangent(terms[t].i))) *
            part(z.stream(layout.tangent(terms[t].j)));
+}
+
+// The reverse rule of operator stream q, on one chunk of columns (`part` selects it).
+template <typename Scalar, typename Part, typename Chunk, typename Accumulator, typename Scratch>
+void operator_backward(const StreamLayout& layout, int q, const Chunk& d1, const Chunk& d2,
+                       const Chunk& d3, const Part& part, const Streams<Scalar>& z,
+                       const Streams<Scalar>& y_adjoint, Accumulator& z0_bar,
+                       Streams<Scalar>& z_adjoint, Scratch acc) {
+  const auto yq_bar = part(y_adjoint.stream(layout.op(q)));
+  part(z_adjoint.stream(layout.op(q))) = d1 * yq_bar;
+  z0_bar += d2 * yq_bar * part(z.stream(layout.op(q)));
+  if (layout.terms(q).empty()) return;
+  quadratic_terms(layout, q, part, z, acc);
   z0_bar += d3 * yq_bar * acc;
   acc = d2 * yq_bar;  // g = σ'' ȳ^[C], reused by every term
-  for (const OperatorTerm& term : terms) {
+  auto tangent_bar = [&](int i) { return part(z_adjoint.stream(layout.tangent(i))); };
+  auto tangent = [&](int i) { return part(z.stream(layout.tangent(i))); };
+  for (const OperatorTerm& term : layout.terms(q)) {
     const Scalar c = Scalar(term.coefficient);
     if (term.i == term.j) {
-      part(z_adjoint.stream(layout.tangent(term.i))) += (Scalar(2) * c) * acc * part(z.stream(layout.tangent(term.i)));
+      tangent_bar(term.i) += (Scalar(2) * c) * acc * tangent(term.i);
     } else {
-      part(z_adjoint.stream(layout.tangent(term.i))) += c * acc * part(z.stream(layout.tangent(term.j)));
-      part(z_adjoint.stream(layout.tangent(term.j))) += c * acc * part(z.stream(layout.tangent(term.i)));
+      tangent_bar(term.i) += c * acc * tangent(term.j);
+      tangent_bar(term.j) += c * acc * tangent(term.i);
     }
   }
 }
@@ -100,18 +110,14 @@ void elementwise_forward(const StreamLayout& layout, const std::vector<Matrix<Sc
     part(y.values()) = part(tables[0]);
     if (layout.count() == 1) continue;
     const auto d1 = part(tables[1]);
-    for (int i = 0; i < layout.tangents(); ++i) part(y.stream(layout.tangent(i))) = d1 * part(z.stream(layout.tangent(i)));
+    for (int i = 0; i < layout.tangents(); ++i)
+      part(y.stream(layout.tangent(i))) = d1 * part(z.stream(layout.tangent(i)));
     for (int q = 0; q < layout.operators(); ++q) {
       auto yq = part(y.stream(layout.op(q)));
       yq = d1 * part(z.stream(layout.op(q)));
-      const auto& terms = layout.terms(q);
-      if (terms.empty()) continue;
+      if (layout.terms(q).empty()) continue;
       auto acc = quadratic.leftCols(w).array();
-      acc = Scalar(terms[0].coefficient) * part(z.stream(layout.tangent(terms[0].i))) *
-            part(z.stream(layout.tangent(terms[0].j)));
-      for (size_t t = 1; t < terms.size(); ++t)
-        acc += Scalar(terms[t].coefficient) * part(z.stream(layout.tangent(terms[t].i))) *
-               part(z.stream(layout.tangent(terms[t].j)));
+      quadratic_terms(layout, q, part, z, acc);
       yq += part(tables[2]) * acc;
     }
   }
