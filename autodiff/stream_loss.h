@@ -18,6 +18,14 @@ class StreamLoss {
   // their loss sum and writes ∂loss/∂out into `adjoint` (sized like `out`, zero on entry).
   virtual double evaluate(Eigen::Index first, const StreamLayout& layout,
                           const Streams<Scalar>& out, Streams<Scalar>& adjoint) const = 0;
+  // The same for the outputs of one scale of a field with one output per scale (BACON,
+  // fields/field.h), which calls it once per trained scale. A loss whose target differs
+  // from scale to scale (a picture low-passed to each scale's band) overrides it.
+  virtual double evaluate_scale(int scale, Eigen::Index first, const StreamLayout& layout,
+                                const Streams<Scalar>& out, Streams<Scalar>& adjoint) const {
+    (void)scale;
+    return evaluate(first, layout, out, adjoint);
+  }
 };
 
 // A StreamLoss from a callable with the same signature.

@@ -26,6 +26,13 @@ class StreamResidual {
   virtual void backward(Eigen::Index first, const StreamLayout& layout, const Streams<Scalar>& out,
                         const Matrix<Scalar>& r_bar, Streams<Scalar>& adjoint) const = 0;
 
+  // The residual of one scale's outputs of a field with one output per scale (BACON,
+  // fields/field.h): itself, unless its target differs per scale (StreamLoss::evaluate_scale).
+  virtual const StreamResidual& at_scale(int scale) const {
+    (void)scale;
+    return *this;
+  }
+
   // Trainable numbers the residual reads besides the field's outputs (an inverse problem's
   // unknown constants, solvers/core/unknowns.h): how many (q, 0 for most residuals), and
   // ∂r/∂c for the block's rows of r, (rows · components()) × q, row n·C + c for r_c of

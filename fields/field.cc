@@ -51,7 +51,7 @@ class ScaleLoss final : public autodiff::StreamLoss<Scalar> {
       slice_scale(out, s, m_, part);
       part_adjoint.resize(out.points, out.count, m_);
       part_adjoint.data.setZero();
-      sum += inner_.evaluate(first_point, layout, part, part_adjoint);
+      sum += inner_.evaluate_scale(s, first_point, layout, part, part_adjoint);
       adjoint.data.middleCols(s * m_, m_) += part_adjoint.data;
     }
     return sum;

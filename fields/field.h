@@ -68,11 +68,12 @@ class Field {
   // outputs, scale 0 first. Everything below shows output_scale()'s output_dim() columns, the
   // one problems, outputs and metrics see; value_and_gradient's loss is that scale's, or,
   // when the type trains all scales (BACON's sum of per-scale losses), the loss applied to
-  // each scale's columns in turn and summed. A problem so needs no change to train a field
-  // with several scales. residuals_and_jacobian (Levenberg–Marquardt) fits output_scale()
-  // alone: its residual count is fixed by the problem. One field type's output streams are
-  // one quantity per scale; a single-scale field (every other type) is scales() = 1 and
-  // passes straight through.
+  // each scale's columns in turn and summed, each call by StreamLoss::evaluate_scale with its
+  // scale (a loss whose target differs per scale overrides it; fit's band-limited targets). A
+  // problem so needs no change to train a field with several scales. residuals_and_jacobian
+  // (Levenberg–Marquardt) fits output_scale() alone: its residual count is fixed by the
+  // problem. One field type's output streams are one quantity per scale; a single-scale field
+  // (every other type) is scales() = 1 and passes straight through.
   int scales() const { return scales_; }
   int output_scale() const { return output_scale_; }
   bool trains_all_scales() const { return all_scales_; }

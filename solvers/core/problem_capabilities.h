@@ -17,6 +17,7 @@
 //   HasInstances          fit (a family)        `nfield run` with training.meta (meta_run.h)
 //   HasFieldBranches      pde (unknown fields   setup: the field's branches
 //                         with `hidden`)
+//   HasScaleTargets       fit                   setup, when the field has several scales
 //
 // Sampling is a pure function of the trainer's random engine and the problem's state: a
 // problem whose points depend on the field in training (NeRF's occupancy grid and importance
@@ -117,6 +118,17 @@ class ReportsProgress {
   virtual ~ReportsProgress() = default;
   virtual std::vector<std::pair<std::string, double>> progress_metrics(const OutputContext& context,
                                                                        const TrainingRate& rate) const = 0;
+};
+
+// A target per scale for a field with one output per scale (fields/field.h; BACON): the
+// driver gives the scales' band limits (scales × input_dim, cycles per unit of each input)
+// and the scale the outputs show; the problem's residuals then answer at_scale(s) with scale
+// s's target (autodiff::StreamResidual::at_scale) and their plain evaluate with the output
+// scale's.
+class HasScaleTargets {
+ public:
+  virtual ~HasScaleTargets() = default;
+  virtual void set_scale_cutoffs(const Eigen::MatrixXd& cutoffs, int output_scale) = 0;
 };
 
 // Renders views of the trained field into context.dir (`nfield render`).

@@ -40,23 +40,36 @@ void LinearResidual::backward(Eigen::Index first, const StreamLayout&, const Str
   }
 }
 
+ScaleTargetResidual::ScaleTargetResidual(std::vector<std::unique_ptr<Residual>> scales, int output_scale)
+    : scales_(std::move(scales)), output_scale_(output_scale) {
+  if (output_scale_ < 0 || output_scale_ >= static_cast<int>(scales_.size()))
+    throw std::invalid_argument("ScaleTargetResidual: the output scale is not one of the scales");
+}
+
+const Residual& ScaleTargetResidual::at_scale(int scale) const {
+  if (scale < 0 || scale >= static_cast<int>(scales_.size()))
+    throw std::invalid_argument("ScaleTargetResidual: scale " + std::to_string(scale) + " of " +
+                                std::to_string(scales_.size()));
+  return *scales_[static_cast<size_t>(scale)];
+}
+
 template <typename Scalar>
-double ResidualLoss<Scalar>::evaluate(Eigen::Index first, const StreamLayout& layout,
-                                      const Streams<Scalar>& out, Streams<Scalar>& adjoint) const {
+double ResidualLoss<Scalar>::evaluate_with(const Residual& residual, Eigen::Index first, const StreamLayout& layout,
+                                           const Streams<Scalar>& out, Streams<Scalar>& adjoint) const {
   thread_local Streams<double> out_d, adjoint_d;
   thread_local Eigen::MatrixXd r;
   out_d.points = out.points;
   out_d.count = out.count;
   out_d.data = out.data.template cast<double>();
   first += offset_;
-  residual_.evaluate(first, layout, out_d, r);
+  residual.evaluate(first, layout, out_d, r);
   adjoint_d.points = out.points;
   adjoint_d.count = out.count;
   adjoint_d.data.setZero(out.data.rows(), out.data.cols());
   const auto gather_extra = [&](const Eigen::MatrixXd& r_bar) {
-    if (!extra_ || residual_.extra_parameters() == 0) return;
+    if (!extra_ || residual.extra_parameters() == 0) return;
     Eigen::MatrixXd jacobian;
-    residual_.extra_jacobian(first, layout, out_d, jacobian);
+    residual.extra_jacobian(first, layout, out_d, jacobian);
     // Rows of the Jacobian are point-major (n·C + c); r̄ is n × C.
     const Eigen::MatrixXd r_bar_rows = r_bar.transpose();
     extra_->add(first, jacobian.transpose() * Eigen::Map<const Eigen::VectorXd>(r_bar_rows.data(), r_bar_rows.size()));
@@ -64,13 +77,13 @@ double ResidualLoss<Scalar>::evaluate(Eigen::Index first, const StreamLayout& la
   if (point_weights_) {
     const auto a = point_weights_->segment(first, out.points).array();
     const Eigen::MatrixXd r_bar = (2.0 * scale_) * (r.array().colwise() * a).matrix();
-    residual_.backward(first, layout, out_d, r_bar, adjoint_d);
+    residual.backward(first, layout, out_d, r_bar, adjoint_d);
     gather_extra(r_bar);
     adjoint.data += adjoint_d.data.template cast<Scalar>();
     return scale_ * (r.rowwise().squaredNorm().array() * a).sum();
   }
   const Eigen::MatrixXd r_bar = (2.0 * scale_) * r;
-  residual_.backward(first, layout, out_d, r_bar, adjoint_d);
+  residual.backward(first, layout, out_d, r_bar, adjoint_d);
   gather_extra(r_bar);
   adjoint.data += adjoint_d.data.template cast<Scalar>();
   return scale_ * r.squaredNorm();

@@ -49,6 +49,31 @@ class LinearResidual final : public Residual {
   Eigen::MatrixXd source_;
 };
 
+// A residual with a version per scale of a multiscale field (HasScaleTargets,
+// solvers/core/problem_capabilities.h): at_scale(s) is scale s's, and the plain calls are
+// the output scale's (what Levenberg–Marquardt and a single-scale loss read).
+class ScaleTargetResidual final : public Residual {
+ public:
+  ScaleTargetResidual(std::vector<std::unique_ptr<Residual>> scales, int output_scale);
+
+  int components() const override { return output().components(); }
+  void evaluate(Eigen::Index first, const StreamLayout& layout, const Streams<double>& out,
+                Eigen::MatrixXd& r) const override {
+    output().evaluate(first, layout, out, r);
+  }
+  void backward(Eigen::Index first, const StreamLayout& layout, const Streams<double>& out,
+                const Eigen::MatrixXd& r_bar, Streams<double>& adjoint) const override {
+    output().backward(first, layout, out, r_bar, adjoint);
+  }
+  const Residual& at_scale(int scale) const override;
+
+ private:
+  const Residual& output() const { return *scales_[static_cast<size_t>(output_scale_)]; }
+
+  std::vector<std::unique_ptr<Residual>> scales_;
+  int output_scale_;
+};
+
 // What a loss term draws for one step: the network's inputs x (N × input_dim) and, for a
 // term whose residuals each read several points (a pixel's colour reads every sample of its
 // ray), the groups: offsets 0 = g₀ ≤ … ≤ g_G = N, group k being rows [g_k, g_{k+1}) of x
@@ -98,12 +123,15 @@ struct LossTerm {
 // The gradient of a loss with respect to its residuals' extra parameters (unknown constants,
 // Residual::extra_parameters), gathered from the blocks of one pass, which run on several
 // threads, and summed in the order of the blocks: a run stays repeatable bit for bit for a
-// given thread count, as the field's gradient is.
+// given thread count, as the field's gradient is. A block may add more than once (a
+// multiscale field's loss evaluates each scale's outputs of the block in turn, in one
+// thread): its additions are summed in the order they come.
 class ExtraGradient {
  public:
   void add(Eigen::Index first, Eigen::VectorXd g) {
     const std::lock_guard<std::mutex> lock(mutex_);
-    blocks_[first] = std::move(g);
+    const auto [at, inserted] = blocks_.try_emplace(first, std::move(g));
+    if (!inserted) at->second += g;
   }
   // Σ over the blocks added since the last clear (q entries).
   Eigen::VectorXd sum(Eigen::Index q) const {
@@ -136,9 +164,18 @@ class ResidualLoss final : public autodiff::StreamLoss<Scalar> {
       : residual_(residual), scale_(weight / static_cast<double>(total_points)),
         point_weights_(point_weights), offset_(offset), extra_(extra) {}
   double evaluate(Eigen::Index first, const StreamLayout& layout, const Streams<Scalar>& out,
-                  Streams<Scalar>& adjoint) const override;
+                  Streams<Scalar>& adjoint) const override {
+    return evaluate_with(residual_, first, layout, out, adjoint);
+  }
+  double evaluate_scale(int scale, Eigen::Index first, const StreamLayout& layout, const Streams<Scalar>& out,
+                        Streams<Scalar>& adjoint) const override {
+    return evaluate_with(residual_.at_scale(scale), first, layout, out, adjoint);
+  }
 
  private:
+  double evaluate_with(const Residual& residual, Eigen::Index first, const StreamLayout& layout,
+                       const Streams<Scalar>& out, Streams<Scalar>& adjoint) const;
+
   const Residual& residual_;
   double scale_;
   const Eigen::VectorXd* point_weights_;  // not owned; null: all 1

@@ -16,6 +16,7 @@
 //     frames: 32                      # video: the first n frames of the folder
 //     seconds: [0.5, 2.5]             # audio: that part of the clip
 //     time_scale: 1                   # audio, video: t runs over [-s, s] instead of [-1, 1]
+//     scale_targets: band_limited     # a multiscale field's coarser scales: band_limited | signal
 //
 // Coordinates: the sample centres spread evenly over [-1, 1] on each axis, so that sample k
 // of n lies at -1 + (2k + 1)/n (the centre of its n-th of the interval): (x, y) for an image,
@@ -43,11 +44,20 @@
 // waveform.png (top: the clip in grey and the reconstruction in red; bottom: the error in
 // blue); video: frames/reconstruction_NNN.png and frames/error_NNN.png (one viridis range,
 // 0 to max_abs_err, for all frames). Every file is written atomically.
-// A field with several scales (field.type: bacon) is fitted as any field (its loss the sum
-// of the scales' losses, fields/field.h); an image fit then also writes each scale:
+// A field with several scales (field.type: bacon) is fitted as any field, its loss the sum
+// of the scales' losses (fields/field.h). Scale s's target is the signal's band-limited part
+// P_K s (solvers/problems/periodic_lowpass.h), K = ⌊F_s D⌋ cycles over the box per axis (F_s
+// the scale's cut-off in cycles per unit, D the box's width), with `scale_targets:
+// band_limited` (the default); the signal itself for every scale with `signal` (BACON's own
+// loss). On the full grid (field.period 1) the two have the same minimiser (s − P_K s is
+// orthogonal to all a head band-limited to K can hold), but on a batch of random samples the
+// part of s above a coarse head's band is a residual it can never reduce, and its gradient
+// is noise in the layers the scales share (docs/experiments.md, 2026-11-28). A family's pictures keep the
+// signal as every scale's target. An image fit then also writes each scale:
 // reconstruction_scaleS.png, psnr_full_scaleS and, at the scale's own resolution,
 // psnr_scaleS against the picture averaged to it (write_scale_outputs below).
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -65,6 +75,7 @@
 #include "solvers/core/problem_capabilities.h"
 #include "solvers/core/slice_progress.h"
 #include "solvers/problems/image_family.h"
+#include "solvers/problems/periodic_lowpass.h"
 #include "solvers/problems/problems.h"
 
 namespace nfield::solvers {
@@ -90,7 +101,7 @@ double snr_db(const Eigen::MatrixXd& fitted, const Eigen::MatrixXd& target) {
   return 10.0 * std::log10(target.squaredNorm() / std::max((fitted - target).squaredNorm(), 1e-300));
 }
 
-class Fit final : public Problem, public ReportsProgress, public HasInstances {
+class Fit final : public Problem, public ReportsProgress, public HasInstances, public HasScaleTargets {
  public:
   explicit Fit(const ProblemContext& context) : domain_({-1.0}, {1.0}) {
     const io::ConfigNode equation = context.root.child("equation");
@@ -100,12 +111,14 @@ class Fit final : public Problem, public ReportsProgress, public HasInstances {
       equation.require("family", signal_.kind == Kind::kImage, "expected signal: image (a family holds pictures)");
       equation.require("family", !equation.has("path"), "a family names its pictures itself: drop equation.path");
       read_family(equation, context.config_dir);
+      scale_targets_ = false;
     } else {
       const fs::path path = context.config_dir / equation.get<std::string>("path");
       if (signal_.kind == Kind::kAudio)
         read_audio(equation, path);
       else
         read_pictures(equation, path);
+      scale_targets_ = equation.get_choice("scale_targets", {"band_limited", "signal"}, "band_limited") == "band_limited";
     }
     equation.reject_unknown_keys();
     finish();
@@ -144,16 +157,43 @@ class Fit final : public Problem, public ReportsProgress, public HasInstances {
       return TermPoints(coordinates(index));
     };
     term.residual = [this](const TermPoints& points) -> std::unique_ptr<Residual> {
-      const Eigen::MatrixXd& x = points.x;
-      Eigen::MatrixXd target(x.rows(), signal_.channels);
-      for (Eigen::Index i = 0; i < x.rows(); ++i)
-        target.row(i) = signal_.values.row(index_of(x.row(i))).cast<double>();
-      std::vector<LinearResidual::Term> terms;
-      for (int c = 0; c < signal_.channels; ++c)
-        terms.push_back({c, autodiff::StreamLayout::value(), c, Eigen::VectorXd::Ones(1)});
-      return std::make_unique<LinearResidual>(std::move(terms), std::move(target));
+      Eigen::VectorXi index(points.x.rows());
+      for (Eigen::Index i = 0; i < index.size(); ++i) index(i) = static_cast<int>(index_of(points.x.row(i)));
+      if (scale_values_.empty()) return value_residual(index, signal_.values);
+      std::vector<std::unique_ptr<Residual>> scales;
+      for (const Eigen::MatrixXf& values : scale_values_)
+        scales.push_back(value_residual(index, values.size() > 0 ? values : signal_.values));
+      return std::make_unique<ScaleTargetResidual>(std::move(scales), output_scale_);
     };
     return {term};
+  }
+
+  // Scale s's target (scale_targets: band_limited): the signal's band-limited part, kept
+  // where the scale's band is narrower than the grid's (an empty matrix: the signal itself).
+  void set_scale_cutoffs(const Eigen::MatrixXd& cutoffs, int output_scale) override {
+    if (!scale_targets_ || cutoffs.cols() != domain_.input_dim()) return;
+    const Eigen::VectorXd width = domain_.input_upper() - domain_.input_lower();
+    const std::array<Eigen::Index, 3> dims{signal_.width, signal_.height, signal_.frames};
+    // The grid axes' inputs: x, y, t for a picture or video; t alone for audio.
+    const std::array<int, 3> input = signal_.kind == Kind::kAudio ? std::array<int, 3>{0, -1, -1}
+                                     : signal_.kind == Kind::kImage ? std::array<int, 3>{0, 1, -1}
+                                                                    : std::array<int, 3>{0, 1, 2};
+    scale_values_.assign(static_cast<size_t>(cutoffs.rows()), Eigen::MatrixXf());
+    output_scale_ = output_scale;
+    for (Eigen::Index s = 0; s < cutoffs.rows(); ++s) {
+      std::array<Eigen::Index, 3> cycles{};
+      bool narrower = false;
+      for (int axis = 0; axis < 3; ++axis) {
+        const int k = input[static_cast<size_t>(axis)];
+        cycles[static_cast<size_t>(axis)] =
+            k < 0 ? dims[static_cast<size_t>(axis)] : static_cast<Eigen::Index>(std::floor(cutoffs(s, k) * width(k) + 1e-9));
+        narrower = narrower || 2 * cycles[static_cast<size_t>(axis)] < dims[static_cast<size_t>(axis)];
+      }
+      if (!narrower) continue;
+      Eigen::MatrixXd values = signal_.values.cast<double>();
+      periodic_lowpass(values, dims, cycles);
+      scale_values_[static_cast<size_t>(s)] = values.cast<float>();
+    }
   }
 
   // rel_l2 over every sample, after each stage. The evaluation is kept for write_outputs,
@@ -392,6 +432,16 @@ class Fit final : public Problem, public ReportsProgress, public HasInstances {
     return x;
   }
 
+  // value − target per channel at samples `index` of `values` (samples × channels).
+  std::unique_ptr<Residual> value_residual(const Eigen::VectorXi& index, const Eigen::MatrixXf& values) const {
+    Eigen::MatrixXd target(index.size(), signal_.channels);
+    for (Eigen::Index i = 0; i < index.size(); ++i) target.row(i) = values.row(index(i)).cast<double>();
+    std::vector<LinearResidual::Term> terms;
+    for (int c = 0; c < signal_.channels; ++c)
+      terms.push_back({c, autodiff::StreamLayout::value(), c, Eigen::VectorXd::Ones(1)});
+    return std::make_unique<LinearResidual>(std::move(terms), std::move(target));
+  }
+
   Eigen::Index index_of(const Eigen::Ref<const Eigen::RowVectorXd>& x) const {
     if (signal_.kind == Kind::kAudio) return sample_at(x(0) / time_scale_, signal_.width);
     const Eigen::Index c = sample_at(x(0), signal_.width), r = sample_at(-x(1), signal_.height);
@@ -507,6 +557,10 @@ class Fit final : public Problem, public ReportsProgress, public HasInstances {
   std::size_t training_count_ = 0;
   double time_scale_ = 1.0;
   Eigen::VectorXi progress_samples_;
+  // scale_targets: band_limited; per scale of a multiscale field its target (HasScaleTargets).
+  bool scale_targets_ = true;
+  std::vector<Eigen::MatrixXf> scale_values_;
+  int output_scale_ = 0;
   mutable std::optional<Eigen::MatrixXd> last_evaluation_;  // reported_error's, for write_outputs
 };
 

@@ -388,6 +388,14 @@ void check_field_streams(const RunSetup& s) {
   }
 }
 
+// A multiscale field's band limits, for a problem with a target per scale.
+void give_scale_cutoffs(RunSetup& s) {
+  auto* targets = capability<HasScaleTargets>(*s.problem);
+  const fields::FieldType& type = fields::field_type(s.field.type);
+  if (targets && type.output_scales(s.field) > 1)
+    targets->set_scale_cutoffs(type.scale_cutoffs(s.field), type.output_scale(s.field));
+}
+
 // The setup of a config already parsed; `config` names it (and its folder is the default
 // data folder).
 RunSetup setup_run(io::ConfigNode root, const std::filesystem::path& config,
@@ -409,6 +417,7 @@ RunSetup setup_run(io::ConfigNode root, const std::filesystem::path& config,
                                               s.problem->default_sine_frequencies());
   if (const auto* branched = capability<HasFieldBranches>(*s.problem)) set_field_branches(s, branched->field_branches());
   fit_field_to_run(s);  // the encoding: input variances, domain box, stages
+  give_scale_cutoffs(s);
   check_field_streams(s);
   s.init = read_field_init(s.root.child_or_empty("field"), s.field, s.data_dir);
   check_latent(s);

@@ -2,8 +2,9 @@
 //
 // BACON (fields/bacon.h): the band limit of every scale by FFT on a fine periodic grid, for
 // random networks and after training; the lattice budget; the multiscale loss as the sum of
-// the per-scale losses; the scales after a fit ordered coarse ≤ fine and each close to the
-// signal's own low-pass; located config errors for every key; a checkpoint round trip.
+// the per-scale losses, each asked for with its scale (a target per scale); the scales after
+// a fit ordered coarse ≤ fine and each close to the signal's own low-pass; located config
+// errors for every key; a checkpoint round trip.
 // (The derivative streams go through the stream harness: tests/testing/stream_checks.h's
 // bacon cases.)
 #include <gtest/gtest.h>
@@ -238,6 +239,45 @@ TEST(Bacon, AllScalesLossIsTheSumOfTheScalesLosses) {
   // The default output is the finest scale.
   EXPECT_EQ(all.values(x), all.values(x, 2));
   EXPECT_NE(all.values(x), all.values(x, 1));
+}
+
+// A loss with a target per scale: scale s's outputs against s + 1 (value stream only).
+class PerScaleLoss final : public autodiff::StreamLoss<double> {
+ public:
+  double evaluate(Eigen::Index, const autodiff::StreamLayout&, const Streams<double>&, Streams<double>&) const override {
+    ADD_FAILURE() << "a multiscale field asks each scale's loss by evaluate_scale";
+    return 0;
+  }
+  double evaluate_scale(int scale, Eigen::Index, const autodiff::StreamLayout&, const Streams<double>& out,
+                        Streams<double>& adjoint) const override {
+    const Eigen::ArrayXd r = out.stream(0).col(0).array() - (scale + 1.0);
+    adjoint.stream(0).col(0) = 2 * r.matrix();
+    return r.square().sum();
+  }
+};
+
+TEST(Bacon, EachScalesLossIsAskedForWithItsScale) {
+  FieldOptions o = bacon(2, {6, 5, 4}, {1.0, 2.0, 3.0}, 3);
+  const Field<double> all(o);
+  const Eigen::MatrixXd x = Eigen::MatrixXd::Random(9, 2);
+  const autodiff::StreamLayout layout(autodiff::StreamSpec::values(2));
+  double expected = 0;
+  for (int s = 0; s < 3; ++s) expected += (all.values(x, s).col(0).array() - (s + 1.0)).square().sum();
+  Eigen::VectorXd g_all = Eigen::VectorXd::Zero(all.parameter_count());
+  EXPECT_NEAR(all.value_and_gradient(all.parameters().data(), layout, {x}, PerScaleLoss(), g_all.data()), expected,
+              1e-12 * expected);
+  // The gradient: the sum of the one-scale fields' (each asks its own scale).
+  Eigen::VectorXd g_sum = Eigen::VectorXd::Zero(all.parameter_count());
+  for (int s = 0; s < 3; ++s) {
+    BaconOptions b = bacon_options(o);
+    b.train_all_scales = false;
+    b.output_scale = s;
+    FieldOptions one = o;
+    one.extension = b;
+    const Field<double> field(one);
+    field.value_and_gradient(all.parameters().data(), layout, {x}, PerScaleLoss(), g_sum.data());
+  }
+  EXPECT_LE((g_all - g_sum).cwiseAbs().maxCoeff(), 1e-12 * g_sum.cwiseAbs().maxCoeff());
 }
 
 FieldOptions from_text(const std::string& field) {

@@ -1,10 +1,9 @@
 // SPDX-License-Identifier: MIT
 //
-// Signal fitting (solvers/problems/fit.cc): the samples' coordinates and targets, a small
-// image fit far above the best constant image, short audio and video fits that write their
-// files (the WAV reads back at the clip's rate and length;
-// io::write_audio itself: tests/io/audio_test.cc), and bad inputs located at their
-// keys.
+// Signal fitting (solvers/problems/fit.cc): the samples' coordinates and targets (per scale
+// for a multiscale field), a small image fit far above the best constant image, short audio
+// and video fits that write their files (the WAV reads back at the clip's rate and length;
+// io::write_audio itself: tests/io/audio_test.cc), and bad inputs located at their keys.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -13,10 +12,13 @@
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <numbers>
+#include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "io/audio.h"
 #include "io/png_image.h"
+#include "solvers/core/residual.h"
 #include "solvers/run/run.h"
 #include "tests/testing/config_errors.h"
 #include "tests/testing/scratch.h"
@@ -96,6 +98,91 @@ training: {batch: {interior: 100000}, stages: [{optimizer: adam, steps: 1}]}
   // Fewer: random pixels, each with its own target.
   const TermPoints some = terms[0].sample(rng, 5);
   EXPECT_EQ(some.x.rows(), 5);
+}
+
+// The periodic projection onto the modes |m| ≤ k of n samples, written out as a matrix:
+// (1/n)(1 + 2 Σ_{m=1..k} cos(2π m (i − j)/n)), the identity when 2k ≥ n.
+Eigen::MatrixXd lowpass_matrix(Eigen::Index n, Eigen::Index k) {
+  if (2 * k >= n) return Eigen::MatrixXd::Identity(n, n);
+  Eigen::MatrixXd a(n, n);
+  for (Eigen::Index i = 0; i < n; ++i)
+    for (Eigen::Index j = 0; j < n; ++j) {
+      double sum = 1;
+      for (Eigen::Index m = 1; m <= k; ++m)
+        sum += 2 * std::cos(2 * std::numbers::pi * static_cast<double>(m * (i - j)) / static_cast<double>(n));
+      a(i, j) = sum / static_cast<double>(n);
+    }
+  return a;
+}
+
+// −r of a field whose outputs are all zero: the targets, points × channels.
+Eigen::MatrixXd targets(const Residual& residual, const LossTerm& term, Eigen::Index points) {
+  const autodiff::StreamLayout layout(term.spec);
+  autodiff::Streams<double> out;
+  out.points = points;
+  out.count = layout.count();
+  out.data = Eigen::MatrixXd::Zero(points * out.count, residual.components());
+  Eigen::MatrixXd r;
+  residual.evaluate(0, layout, out, r);
+  return -r;
+}
+
+// A BACON field's scales (HasScaleTargets): with scale_targets: band_limited (the default)
+// scale s is trained against the picture's modes up to its cut-off along each axis (here
+// 2, 4 and 8 cycles over the box: 16 × 12 pixels keep all at the finest), the plain
+// residual is the finest scale's, and ResidualLoss::evaluate_scale reads scale s's; with
+// `signal` every scale's target is the picture.
+TEST(Fit, MultiscaleFieldsTrainEachScaleOnThePicturesBandLimitedPart) {
+  const fs::path config = write_config("fit_scales", R"yaml(
+problem: fit
+equation: {signal: image, path: frame.png}
+field: {type: bacon, hidden: [8, 8, 8], resolution: [4, 8, 16]}
+training: {batch: {interior: 100000}, stages: [{optimizer: adam, steps: 1}]}
+)yaml");
+  io::Image picture = test_picture(16, 12, 1);
+  for (Eigen::Index i = 0; i < picture.pixels.rows(); ++i)  // some detail at every scale
+    picture.pixels(i, 2) = static_cast<float>((i * 37) % 11) / 10.0f;
+  io::write_png(config.parent_path() / "frame.png", picture);
+  const auto residuals = [&](const std::vector<std::string>& overrides) {
+    const RunSetup setup = load_run(config, overrides);
+    const LossTerm term = setup.problem->loss_terms().at(0);
+    Random rng(0);
+    return std::pair{term, term.residual(term.sample(rng, 100000))};
+  };
+  const auto [term, residual] = residuals({});
+  const Eigen::MatrixXd picture_values = targets(residual->at_scale(2), term, 192);
+  EXPECT_EQ(targets(*residual, term, 192), picture_values);  // the plain residual: the output scale's
+  for (int s = 0; s < 3; ++s) {
+    const Eigen::Index k = Eigen::Index{2} << s;
+    const Eigen::MatrixXd ax = lowpass_matrix(16, k), ay = lowpass_matrix(12, k);
+    const Eigen::MatrixXd got = targets(residual->at_scale(s), term, 192);
+    for (Eigen::Index c = 0; c < 3; ++c) {
+      // Samples run x fastest: a 16 × 12 column-major matrix per channel.
+      const Eigen::MatrixXd grid = Eigen::Map<const Eigen::MatrixXd>(picture_values.col(c).data(), 16, 12);
+      const Eigen::MatrixXd expected = ax * grid * ay.transpose();
+      EXPECT_LT((Eigen::Map<const Eigen::MatrixXd>(got.col(c).data(), 16, 12) - expected).cwiseAbs().maxCoeff(), 1e-6)
+          << "scale " << s << " channel " << c;
+      if (s < 2) EXPECT_GT((expected - grid).cwiseAbs().maxCoeff(), 0.05) << "scale " << s << " channel " << c;
+    }
+    // The loss of scale s reads scale s's target: (1/N) Σ target² for zero outputs.
+    const ResidualLoss<double> loss(*residual, 1.0, 192);
+    const autodiff::StreamLayout layout(term.spec);
+    autodiff::Streams<double> out, adjoint;
+    out.points = adjoint.points = 192;
+    out.count = adjoint.count = layout.count();
+    out.data = adjoint.data = Eigen::MatrixXd::Zero(192 * layout.count(), 3);
+    EXPECT_NEAR(loss.evaluate_scale(s, 0, layout, out, adjoint), got.squaredNorm() / 192, 1e-12) << "scale " << s;
+  }
+  EXPECT_THROW(residual->at_scale(3), std::invalid_argument);
+
+  const auto [plain_term, plain] = residuals({"equation.scale_targets=signal"});
+  EXPECT_EQ(targets(plain->at_scale(0), plain_term, 192), picture_values);
+  const fs::path bad = write_config("fit_scales_bad", R"yaml(
+problem: fit
+equation: {signal: image, path: frame.png, scale_targets: lowpass}
+)yaml");
+  io::write_png(bad.parent_path() / "frame.png", picture);
+  expect_located_error(bad, {3, 59, "equation.scale_targets", "band_limited, signal"});
 }
 
 // ~1 s: a 32 × 32 crop of camera.png through a small hash grid, 150 Adam steps.
