@@ -205,6 +205,16 @@ TEST(Bacon, TrainedScalesStayBandLimitedAndApproachTheirLowPass) {
   }
 }
 
+// `o` with the loss and outputs of scale s alone.
+FieldOptions one_scale(const FieldOptions& o, int s) {
+  BaconOptions b = bacon_options(o);
+  b.train_all_scales = false;
+  b.output_scale = s;
+  FieldOptions one = o;
+  one.extension = b;
+  return one;
+}
+
 TEST(Bacon, AllScalesLossIsTheSumOfTheScalesLosses) {
   FieldOptions o = bacon(2, {6, 5, 4}, {1.0, 2.0, 3.0}, 3);
   const Field<double> all(o);
@@ -224,12 +234,7 @@ TEST(Bacon, AllScalesLossIsTheSumOfTheScalesLosses) {
   Eigen::VectorXd g_sum = Eigen::VectorXd::Zero(all.parameter_count());
   double l_sum = 0;
   for (int s = 0; s < 3; ++s) {
-    BaconOptions b = bacon_options(o);
-    b.train_all_scales = false;
-    b.output_scale = s;
-    FieldOptions one = o;
-    one.extension = b;
-    Field<double> field(one);
+    Field<double> field(one_scale(o, s));
     field.parameters() = all.parameters();
     EXPECT_FALSE(field.trains_all_scales());
     l_sum += field.value_and_gradient(field.parameters().data(), layout, {x}, loss, g_sum.data());
@@ -269,12 +274,7 @@ TEST(Bacon, EachScalesLossIsAskedForWithItsScale) {
   // The gradient: the sum of the one-scale fields' (each asks its own scale).
   Eigen::VectorXd g_sum = Eigen::VectorXd::Zero(all.parameter_count());
   for (int s = 0; s < 3; ++s) {
-    BaconOptions b = bacon_options(o);
-    b.train_all_scales = false;
-    b.output_scale = s;
-    FieldOptions one = o;
-    one.extension = b;
-    const Field<double> field(one);
+    const Field<double> field(one_scale(o, s));
     field.value_and_gradient(all.parameters().data(), layout, {x}, PerScaleLoss(), g_sum.data());
   }
   EXPECT_LE((g_all - g_sum).cwiseAbs().maxCoeff(), 1e-12 * g_sum.cwiseAbs().maxCoeff());
