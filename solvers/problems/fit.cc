@@ -52,8 +52,8 @@
 // loss). On the full grid (field.period 1) the two have the same minimiser (s − P_K s is
 // orthogonal to all a head band-limited to K can hold), but on a batch of random samples the
 // part of s above a coarse head's band is a residual it can never reduce, and its gradient
-// is noise in the layers the scales share (docs/experiments.md, 2026-11-28). A family's pictures keep the
-// signal as every scale's target. An image fit then also writes each scale:
+// is noise in the layers the scales share (docs/experiments.md, 2026-11-28). A family's
+// pictures keep the signal as every scale's target. An image fit then also writes each scale:
 // reconstruction_scaleS.png, psnr_full_scaleS and, at the scale's own resolution,
 // psnr_scaleS against the picture averaged to it (write_scale_outputs below).
 #include <algorithm>
@@ -118,7 +118,8 @@ class Fit final : public Problem, public ReportsProgress, public HasInstances, p
         read_audio(equation, path);
       else
         read_pictures(equation, path);
-      scale_targets_ = equation.get_choice("scale_targets", {"band_limited", "signal"}, "band_limited") == "band_limited";
+      scale_targets_ =
+          equation.get_choice("scale_targets", {"band_limited", "signal"}, "band_limited") == "band_limited";
     }
     equation.reject_unknown_keys();
     finish();
@@ -185,8 +186,8 @@ class Fit final : public Problem, public ReportsProgress, public HasInstances, p
       bool narrower = false;
       for (int axis = 0; axis < 3; ++axis) {
         const int k = input[static_cast<size_t>(axis)];
-        cycles[static_cast<size_t>(axis)] =
-            k < 0 ? dims[static_cast<size_t>(axis)] : static_cast<Eigen::Index>(std::floor(cutoffs(s, k) * width(k) + 1e-9));
+        cycles[static_cast<size_t>(axis)] = k < 0 ? dims[static_cast<size_t>(axis)]
+                                                  : static_cast<Eigen::Index>(std::floor(cutoffs(s, k) * width(k) + 1e-9));
         narrower = narrower || 2 * cycles[static_cast<size_t>(axis)] < dims[static_cast<size_t>(axis)];
       }
       if (!narrower) continue;
