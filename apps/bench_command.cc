@@ -242,7 +242,8 @@ void add_step_options(CLI::App* bench, const BenchModes& m) {
       ->capture_default_str();
   bench->add_option("--warmup", m.step->warmup, "Untimed steps first (--nerf: 3 unless given)")->check(CLI::Range(0, 1000))->capture_default_str();
   bench->add_option("--threads", m.step->threads, "Threads (0: all)")->check(CLI::Range(0, 1024))->capture_default_str();
-  bench->add_option("--block", m.step->block, "Points per block of the chunked pass")
+  bench->add_option("--block", m.step->block,
+                    "Points per block of the chunked pass (--nerf: replaces the config's training.block)")
       ->check(CLI::Range(1L, 1L << 20))
       ->capture_default_str();
   bench->add_option("--widths", m.step->widths,
@@ -396,6 +397,8 @@ void run_selected(const CLI::App* bench, const BenchModes& m) {
     m.nerf->threads = m.step->threads;
     m.nerf->json_only = m.step->json_only;
     m.nerf->overrides = m.accuracy->overrides;
+    // After the --set overrides, so that --block wins over a --set training.block.
+    if (bench->count("--block") > 0) m.nerf->overrides.push_back("training.block=" + std::to_string(m.step->block));
     return run_nerf_bench(*m.nerf);
   }
   if (!*m.accuracy_flag) return run_bench(*m.step);

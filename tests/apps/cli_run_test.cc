@@ -582,13 +582,14 @@ TEST(StepBenchTest, PrintsTheShareOfThePeakPerWidthAndThreadCount) {
 }
 
 // nfield bench --nerf in a tiny setting on the shipped bunny config: the JSON line carries
-// every figure bench/compare_nerf.sh reads, each positive (no timing is asserted). A config
-// without a radiance field is refused with exit code 2.
+// every figure bench/compare_nerf.sh reads, each positive (no timing is asserted), and the
+// --block it was given in place of the config's training.block. A config without a radiance
+// field is refused with exit code 2.
 TEST(NerfBenchTest, PrintsTheFiguresTheComparisonReads) {
   const auto dir = scratch_dir();
   const std::string config = NFIELD_SOURCE_DIR "/configs/nerf_bunny.yaml";
   Outcome o = run_nfield({"bench", "--nerf", "--config", config, "--steps", "2", "--warmup", "1", "--rays", "8",
-                          "--threads", "1", "--render-stride", "16", "--render-repeats", "1", "--json"},
+                          "--threads", "1", "--render-stride", "16", "--render-repeats", "1", "--block", "48", "--json"},
                          dir, dir / "capture");
   ASSERT_EQ(o.code, 0) << describe(o);
   const std::string last = o.out.substr(o.out.rfind("{\"impl\""));
@@ -597,6 +598,7 @@ TEST(NerfBenchTest, PrintsTheFiguresTheComparisonReads) {
   EXPECT_EQ(row["bench"], "nerf");
   EXPECT_EQ(row["rays_per_step"].get<int>(), 8);
   EXPECT_EQ(row["threads"].get<int>(), 1);
+  EXPECT_EQ(row["block"].get<int>(), 48);
   EXPECT_EQ(row["frame_pixels"].get<int>(), 64);  // every 16th pixel of every 16th row of 128²
   for (const char* key : {"rays_per_s", "median_step_ms", "anatomy_median_step_ms", "samples_per_step",
                           "network_ms", "rendering_ms", "share_network", "share_rendering", "mlp_gflops",
