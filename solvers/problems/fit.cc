@@ -62,6 +62,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <limits>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
@@ -160,9 +161,9 @@ class Fit final : public Problem, public ReportsProgress, public HasInstances, p
     term.residual = [this](const TermPoints& points) -> std::unique_ptr<Residual> {
       Eigen::VectorXi index(points.x.rows());
       for (Eigen::Index i = 0; i < index.size(); ++i) index(i) = static_cast<int>(index_of(points.x.row(i)));
-      if (scale_values_.empty()) return value_residual(index, signal_.values);
+      if (scale_cutoffs_.rows() == 0) return value_residual(index, signal_.values);
       std::vector<std::unique_ptr<Residual>> scales;
-      for (const Eigen::MatrixXf& values : scale_values_)
+      for (const Eigen::MatrixXf& values : scale_values())
         scales.push_back(value_residual(index, values.size() > 0 ? values : signal_.values));
       return std::make_unique<ScaleTargetResidual>(std::move(scales), output_scale_);
     };
@@ -171,30 +172,40 @@ class Fit final : public Problem, public ReportsProgress, public HasInstances, p
 
   // Scale s's target (scale_targets: band_limited): the signal's band-limited part, kept
   // where the scale's band is narrower than the grid's (an empty matrix: the signal itself).
+  // Kept here and filtered at the first residual, so that `nfield eval` and a config's
+  // validation spend no FFTs on it.
   void set_scale_cutoffs(const Eigen::MatrixXd& cutoffs, int output_scale) override {
     if (!scale_targets_ || cutoffs.cols() != domain_.input_dim()) return;
-    const Eigen::VectorXd width = domain_.input_upper() - domain_.input_lower();
-    const std::array<Eigen::Index, 3> dims{signal_.width, signal_.height, signal_.frames};
-    // The grid axes' inputs: x, y, t for a picture or video; t alone for audio.
-    const std::array<int, 3> input = signal_.kind == Kind::kAudio ? std::array<int, 3>{0, -1, -1}
-                                     : signal_.kind == Kind::kImage ? std::array<int, 3>{0, 1, -1}
-                                                                    : std::array<int, 3>{0, 1, 2};
-    scale_values_.assign(static_cast<size_t>(cutoffs.rows()), Eigen::MatrixXf());
+    scale_cutoffs_ = cutoffs;
     output_scale_ = output_scale;
-    for (Eigen::Index s = 0; s < cutoffs.rows(); ++s) {
-      std::array<Eigen::Index, 3> cycles{};
-      bool narrower = false;
-      for (int axis = 0; axis < 3; ++axis) {
-        const int k = input[static_cast<size_t>(axis)];
-        cycles[static_cast<size_t>(axis)] = k < 0 ? dims[static_cast<size_t>(axis)]
-                                                  : static_cast<Eigen::Index>(std::floor(cutoffs(s, k) * width(k) + 1e-9));
-        narrower = narrower || 2 * cycles[static_cast<size_t>(axis)] < dims[static_cast<size_t>(axis)];
+  }
+
+  const std::vector<Eigen::MatrixXf>& scale_values() const {
+    std::call_once(scale_values_once_, [this] {
+      const Eigen::VectorXd width = domain_.input_upper() - domain_.input_lower();
+      const std::array<Eigen::Index, 3> dims{signal_.width, signal_.height, signal_.frames};
+      // The grid axes' inputs: x, y, t for a picture or video; t alone for audio.
+      const std::array<int, 3> input = signal_.kind == Kind::kAudio ? std::array<int, 3>{0, -1, -1}
+                                       : signal_.kind == Kind::kImage ? std::array<int, 3>{0, 1, -1}
+                                                                      : std::array<int, 3>{0, 1, 2};
+      scale_values_.assign(static_cast<size_t>(scale_cutoffs_.rows()), Eigen::MatrixXf());
+      for (Eigen::Index s = 0; s < scale_cutoffs_.rows(); ++s) {
+        std::array<Eigen::Index, 3> cycles{};
+        bool narrower = false;
+        for (int axis = 0; axis < 3; ++axis) {
+          const int k = input[static_cast<size_t>(axis)];
+          cycles[static_cast<size_t>(axis)] =
+              k < 0 ? dims[static_cast<size_t>(axis)]
+                    : static_cast<Eigen::Index>(std::floor(scale_cutoffs_(s, k) * width(k) + 1e-9));
+          narrower = narrower || 2 * cycles[static_cast<size_t>(axis)] < dims[static_cast<size_t>(axis)];
+        }
+        if (!narrower) continue;
+        Eigen::MatrixXd values = signal_.values.cast<double>();
+        periodic_lowpass(values, dims, cycles);
+        scale_values_[static_cast<size_t>(s)] = values.cast<float>();
       }
-      if (!narrower) continue;
-      Eigen::MatrixXd values = signal_.values.cast<double>();
-      periodic_lowpass(values, dims, cycles);
-      scale_values_[static_cast<size_t>(s)] = values.cast<float>();
-    }
+    });
+    return scale_values_;
   }
 
   // rel_l2 over every sample, after each stage. The evaluation is kept for write_outputs,
@@ -560,8 +571,10 @@ class Fit final : public Problem, public ReportsProgress, public HasInstances, p
   Eigen::VectorXi progress_samples_;
   // scale_targets: band_limited; per scale of a multiscale field its target (HasScaleTargets).
   bool scale_targets_ = true;
-  std::vector<Eigen::MatrixXf> scale_values_;
+  Eigen::MatrixXd scale_cutoffs_;  // a row per scale; none: every scale against the signal
   int output_scale_ = 0;
+  mutable std::once_flag scale_values_once_;
+  mutable std::vector<Eigen::MatrixXf> scale_values_;
   mutable std::optional<Eigen::MatrixXd> last_evaluation_;  // reported_error's, for write_outputs
 };
 
