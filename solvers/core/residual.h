@@ -65,6 +65,11 @@ class ScaleTargetResidual final : public Residual {
                 const Eigen::MatrixXd& r_bar, Streams<double>& adjoint) const override {
     output().backward(first, layout, out, r_bar, adjoint);
   }
+  int extra_parameters() const override { return output().extra_parameters(); }
+  void extra_jacobian(Eigen::Index first, const StreamLayout& layout, const Streams<double>& out,
+                      Eigen::MatrixXd& jacobian) const override {
+    output().extra_jacobian(first, layout, out, jacobian);
+  }
   const Residual& at_scale(int scale) const override;
 
  private:

@@ -170,16 +170,16 @@ class Fit final : public Problem, public ReportsProgress, public HasInstances, p
     return {term};
   }
 
-  // Scale s's target (scale_targets: band_limited): the signal's band-limited part, kept
-  // where the scale's band is narrower than the grid's (an empty matrix: the signal itself).
-  // Kept here and filtered at the first residual, so that `nfield eval` and a config's
-  // validation spend no FFTs on it.
+  // Only kept: the targets are filtered at the first residual (scale_values), so that
+  // `nfield eval` and a config's validation spend no FFTs on them.
   void set_scale_cutoffs(const Eigen::MatrixXd& cutoffs, int output_scale) override {
     if (!scale_targets_ || cutoffs.cols() != domain_.input_dim()) return;
     scale_cutoffs_ = cutoffs;
     output_scale_ = output_scale;
   }
 
+  // Scale s's target (scale_targets: band_limited): the signal's band-limited part, kept
+  // where the scale's band is narrower than the grid's (an empty matrix: the signal itself).
   const std::vector<Eigen::MatrixXf>& scale_values() const {
     std::call_once(scale_values_once_, [this] {
       const Eigen::VectorXd width = domain_.input_upper() - domain_.input_lower();
@@ -192,12 +192,11 @@ class Fit final : public Problem, public ReportsProgress, public HasInstances, p
       for (Eigen::Index s = 0; s < scale_cutoffs_.rows(); ++s) {
         std::array<Eigen::Index, 3> cycles{};
         bool narrower = false;
-        for (int axis = 0; axis < 3; ++axis) {
-          const int k = input[static_cast<size_t>(axis)];
-          cycles[static_cast<size_t>(axis)] =
-              k < 0 ? dims[static_cast<size_t>(axis)]
-                    : static_cast<Eigen::Index>(std::floor(scale_cutoffs_(s, k) * width(k) + 1e-9));
-          narrower = narrower || 2 * cycles[static_cast<size_t>(axis)] < dims[static_cast<size_t>(axis)];
+        for (size_t axis = 0; axis < 3; ++axis) {
+          const int k = input[axis];
+          cycles[axis] = k < 0 ? dims[axis]
+                               : static_cast<Eigen::Index>(std::floor(scale_cutoffs_(s, k) * width(k) + 1e-9));
+          narrower = narrower || !keeps_every_mode(dims[axis], cycles[axis]);
         }
         if (!narrower) continue;
         Eigen::MatrixXd values = signal_.values.cast<double>();

@@ -14,7 +14,7 @@ namespace {
 // Projects every line of `n` samples along one axis: line starts are `stride` apart within a
 // block of n · stride samples, and blocks follow each other.
 void lowpass_axis(double* data, Eigen::Index total, Eigen::Index n, Eigen::Index stride, Eigen::Index cycles) {
-  if (n <= 1 || 2 * cycles >= n) return;  // every mode is kept
+  if (keeps_every_mode(n, cycles)) return;
   Eigen::FFT<double> fft;
   std::vector<double> line(static_cast<size_t>(n));
   std::vector<std::complex<double>> spectrum;

@@ -19,6 +19,9 @@
 
 namespace nfield::solvers {
 
+// Whether P_K leaves an axis of n samples as it is: K ≥ n/2 keeps every mode.
+inline bool keeps_every_mode(Eigen::Index n, Eigen::Index cycles) { return n <= 1 || 2 * cycles >= n; }
+
 // `values`: samples × channels, samples ordered x fastest, then y, then t (dims = N_x, N_y,
 // N_t; 1 for an axis the grid lacks). `cycles`: K per axis, ≥ 0. Each channel is projected.
 void periodic_lowpass(Eigen::Ref<Eigen::MatrixXd> values, const std::array<Eigen::Index, 3>& dims,
