@@ -45,6 +45,16 @@
 //                                     # 0 drops that term
 //         source_sample_width: 0.1    # std of its points around x₀ (default 2σ)
 //         error_exclude_radius: 0.1   # error metrics skip |x − x₀| < this (default 0.1)
+//         frame: domain               # or source: coordinates relative to x₀ (below)
+//
+//     `frame: source` poses the same problem in coordinates relative to the source, x′ = x − x₀:
+//     the box becomes [lower − x₀, upper − x₀] (with its absorbing layer and conditions) and
+//     the source sits at the origin. The solution is the same function of x′, so a field,
+//     its outputs and its grids see x′ (and so do expressions in `conditions`). Why: over a family of sources drawn anywhere
+//     (equation.family.draw: source_center), the free-space part of every instance is then one
+//     and the same function, G(|x′|); only the layer differs. A learned initialisation
+//     (training.meta) or a shared network can carry what the instances share, which in the
+//     box's own frame, a wave centred somewhere else each time, no single θ can.
 //
 //     The Gaussian is too narrow for uniform points to see, so a second loss term
 //     "pde_source" evaluates the same residual on points drawn from a normal distribution
@@ -170,6 +180,11 @@ class Helmholtz final : public Problem, public MasksError {
     weight_ = equation.get_or("weight", 1.0);
     equation.require("weight", weight_ >= 0, "expected a weight >= 0");
     const int channels = output_dim();
+    const std::string frame = equation.get_or("frame", std::string("domain"));
+    equation.require("frame", frame == "domain" || frame == "source", "expected domain or source");
+    const bool source_frame = frame == "source";
+    equation.require("frame", !source_frame || (complex_ && !equation.has("source")),
+                     "frame: source needs the point source (complex: true and no `source`)");
 
     if (!complex_) {
       source_ = channel_expressions(equation, "source", domain_, 1);
@@ -179,30 +194,7 @@ class Helmholtz final : public Problem, public MasksError {
         source_ = channel_expressions(equation, "source", domain_, channels);
         if (equation.has("exact")) exact_ = channel_expressions(equation, "exact", domain_, channels);
       } else {
-        point_source_ = true;
-        equation.require("wavenumber", k_ > 0, "the point source needs a wavenumber k > 0");
-        equation.require("exact", !equation.has("exact"),
-                         "not used with the point source: the reference is its free-space "
-                         "solution (the Green's function away from the source)");
-        center_ = Eigen::VectorXd::Zero(d);
-        if (equation.has("source_center")) {
-          const auto c = equation.get_list<double>("source_center", static_cast<std::size_t>(d));
-          for (int a = 0; a < d; ++a) {
-            center_(a) = c[a];
-            equation.require("source_center", c[a] >= domain_.lower()[a] && c[a] <= domain_.upper()[a],
-                             "expected a point inside the domain");
-          }
-        }
-        width_ = equation.get_or("source_width", 0.05);
-        equation.require("source_width", width_ > 0 && std::isfinite(width_), "expected a width > 0");
-        sample_width_ = equation.get_or("source_sample_width", 2 * width_);
-        equation.require("source_sample_width", sample_width_ > 0 && std::isfinite(sample_width_),
-                         "expected a width > 0");
-        source_weight_ = equation.get_or("source_weight", weight_);
-        equation.require("source_weight", source_weight_ >= 0, "expected a weight >= 0");
-        exclude_radius_ = equation.get_or("error_exclude_radius", 0.1);
-        equation.require("error_exclude_radius", exclude_radius_ >= 0, "expected a radius >= 0");
-        amplitude_ = -std::exp(0.5 * k_ * k_ * width_ * width_) * std::pow(2 * kPi * width_ * width_, -0.5 * d);
+        read_point_source(equation, source_frame);
       }
     }
     pml_width_ = equation.get_or("pml_width", 0.0);
@@ -300,6 +292,44 @@ class Helmholtz final : public Problem, public MasksError {
   }
 
  private:
+  // The point source's keys (complex, no `source`); with `frame: source` the box moves by −x₀.
+  void read_point_source(const io::ConfigNode& equation, bool source_frame) {
+    const int d = domain_.space_dim();
+    point_source_ = true;
+    equation.require("wavenumber", k_ > 0, "the point source needs a wavenumber k > 0");
+    equation.require("exact", !equation.has("exact"),
+                     "not used with the point source: the reference is its free-space "
+                     "solution (the Green's function away from the source)");
+    center_ = Eigen::VectorXd::Zero(d);
+    if (equation.has("source_center")) {
+      const auto c = equation.get_list<double>("source_center", static_cast<std::size_t>(d));
+      for (int a = 0; a < d; ++a) {
+        center_(a) = c[a];
+        equation.require("source_center", c[a] >= domain_.lower()[a] && c[a] <= domain_.upper()[a],
+                         "expected a point inside the domain");
+      }
+    }
+    width_ = equation.get_or("source_width", 0.05);
+    equation.require("source_width", width_ > 0 && std::isfinite(width_), "expected a width > 0");
+    sample_width_ = equation.get_or("source_sample_width", 2 * width_);
+    equation.require("source_sample_width", sample_width_ > 0 && std::isfinite(sample_width_),
+                     "expected a width > 0");
+    source_weight_ = equation.get_or("source_weight", weight_);
+    equation.require("source_weight", source_weight_ >= 0, "expected a weight >= 0");
+    exclude_radius_ = equation.get_or("error_exclude_radius", 0.1);
+    equation.require("error_exclude_radius", exclude_radius_ >= 0, "expected a radius >= 0");
+    if (source_frame) {
+      std::vector<double> lower = domain_.lower(), upper = domain_.upper();
+      for (int a = 0; a < d; ++a) {
+        lower[static_cast<std::size_t>(a)] -= center_(a);
+        upper[static_cast<std::size_t>(a)] -= center_(a);
+      }
+      domain_ = Domain(std::move(lower), std::move(upper));
+      center_.setZero();
+    }
+    amplitude_ = -std::exp(0.5 * k_ * k_ * width_ * width_) * std::pow(2 * kPi * width_ * width_, -0.5 * d);
+  }
+
   // The source f at points x (n × components).
   Eigen::MatrixXd source_values(const Eigen::MatrixXd& x) const {
     if (!point_source_) return evaluate_channels(source_, x);

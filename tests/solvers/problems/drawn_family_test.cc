@@ -88,6 +88,24 @@ TEST(DrawnFamily, DrawsLieInTheirRangesAndReachEachInstance) {
   EXPECT_EQ(instances(*again.problem, true)[1].values, held_out[1].values);
 }
 
+// With `frame: source` every instance is posed about its own source: its box is the
+// config's moved by −x₀ₖ, and the free-space solution is one function of x′ = x − x₀ₖ.
+TEST(DrawnFamily, SourceFrameGivesEveryInstanceTheSameFreeSpaceField) {
+  std::string config = family_config(kDraw, kMeta);
+  config.replace(config.find("  complex: true\n"), 0, "  frame: source\n");
+  const RunSetup setup = load_run(testutil::write_config("drawn_family_frame", config), {});
+  const Eigen::MatrixXd x = 0.5 * Eigen::MatrixXd::Random(20, 2);
+  const auto training = instances(*setup.problem, false);
+  ASSERT_EQ(training.size(), 5U);
+  const Eigen::MatrixXd first = training[0].problem->exact(x);
+  for (const ProblemInstance& instance : training) {
+    const double x0 = instance.values[0].second, y0 = instance.values[1].second;
+    EXPECT_EQ(instance.problem->domain().lower(), (std::vector<double>{-1 - x0, -1 - y0})) << instance.name;
+    EXPECT_EQ(instance.problem->domain().upper(), (std::vector<double>{1 - x0, 1 - y0})) << instance.name;
+    EXPECT_LT((instance.problem->exact(x) - first).norm(), 1e-12 * first.norm()) << instance.name;
+  }
+}
+
 TEST(DrawnFamily, MetaRunScoresHeldOutInstancesByTheirGridError) {
   const fs::path dir = testutil::scratch_dir("drawn_family_meta");
   const std::string training =

@@ -533,6 +533,53 @@ equation: {wavenumber: 1, source: "0"}
   for (const LossTerm& t : setup.problem->loss_terms()) EXPECT_NE(t.batch_key, "source");
 }
 
+// `frame: source` is the same problem in coordinates x′ = x − x₀: the box moves by −x₀, and the
+// residuals (layer included), the reference and the error mask at x′ are the box frame's at
+// x′ + x₀ for a function u′(x′) = u(x′ + x₀).
+TEST(Helmholtz, SourceFrameIsTheBoxFrameTranslated) {
+  std::string box_frame = kPml;
+  box_frame.replace(box_frame.find("  source_width"), 0, "  source_center: [0.2, -0.1]\n");
+  std::string source_frame = box_frame;
+  source_frame.replace(source_frame.find("  source_width"), 0, "  frame: source\n");
+  const RunSetup box = load_run(write_config("frame_box", box_frame), {});
+  const RunSetup relative = load_run(write_config("frame_source", source_frame), {});
+  EXPECT_EQ(relative.problem->domain().lower(), (std::vector<double>{-1.2, -0.9}));
+  EXPECT_EQ(relative.problem->domain().upper(), (std::vector<double>{0.8, 1.1}));
+
+  const Eigen::Vector2d center(0.2, -0.1);
+  const Analytic v = smooth_test_function();
+  const Analytic moved{[=](const Eigen::VectorXd& p) { return v.value(p + center); },
+                       [=](const Eigen::VectorXd& p) { return v.gradient(p + center); },
+                       [=](const Eigen::VectorXd& p) { return v.hessian(p + center); }};
+  // Points over the whole box: the physical region, the layer, and near the source.
+  Random rng(4);
+  Eigen::MatrixXd x = Eigen::MatrixXd::Random(400, 2);
+  x.topRows(50) = (0.05 * Eigen::MatrixXd::Random(50, 2)).rowwise() + center.transpose();
+  const Eigen::MatrixXd shifted = x.rowwise() - center.transpose();
+  const auto box_terms = box.problem->loss_terms(), relative_terms = relative.problem->loss_terms();
+  for (const std::string name : {"pde", "pde_source"}) {
+    const Eigen::MatrixXd r = residual_at(term_named(box_terms, name), v, x, 2);
+    const Eigen::MatrixXd r_shifted = residual_at(term_named(relative_terms, name), moved, shifted, 2);
+    EXPECT_LT((r - r_shifted).cwiseAbs().maxCoeff(), 1e-9 * (1 + r.cwiseAbs().maxCoeff())) << name;
+  }
+  EXPECT_LT((box.problem->exact(x) - relative.problem->exact(shifted)).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_TRUE((error_mask(*box.problem, x) == error_mask(*relative.problem, shifted)).all());
+  EXPECT_GT(error_mask(*box.problem, x).count(), 20);
+  EXPECT_LT(error_mask(*box.problem, x).count(), 380);
+  // The near-source points are drawn about the origin of the new frame.
+  const Eigen::MatrixXd near = term_named(relative_terms, "pde_source").sample(rng, 2000).x;
+  EXPECT_LT(near.colwise().mean().norm(), 0.02);
+
+  // Located errors: an unknown frame; the frame without the point source.
+  std::string unknown = source_frame;
+  unknown.replace(unknown.find("frame: source"), 13, "frame: sauce");
+  EXPECT_THROW(load_run(write_config("frame_unknown", unknown), {}), io::ConfigError);
+  const std::string domain = "problem: helmholtz\ndomain: {lower: [-1, -1], upper: [1, 1]}\n";
+  EXPECT_THROW(load_run(write_config("frame_expression",
+                                     domain + "equation: {wavenumber: 1, source: '0', frame: source}\n"), {}),
+               io::ConfigError);
+}
+
 // ---- a tiny training run ----------------------------------------------------------------
 
 // The real case on [0, 1]² (two periods of sin(4πy)), float, two threads.
