@@ -49,12 +49,12 @@
 //
 //     `frame: source` poses the same problem in coordinates relative to the source, x′ = x − x₀:
 //     the box becomes [lower − x₀, upper − x₀] (with its absorbing layer and conditions) and
-//     the source sits at the origin. The solution is the same function of x′, so a field,
-//     its outputs and its grids see x′ (and so do expressions in `conditions`). Why: over a family of sources drawn anywhere
-//     (equation.family.draw: source_center), the free-space part of every instance is then one
-//     and the same function, G(|x′|); only the layer differs. A learned initialisation
-//     (training.meta) or a shared network can carry what the instances share, which in the
-//     box's own frame, a wave centred somewhere else each time, no single θ can.
+//     the source sits at the origin. The solution is the same function of x′, so a field, its
+//     outputs and its grids see x′, and so do expressions in `conditions`. Why: over a family
+//     of sources drawn anywhere (equation.family.draw: source_center), the free-space part of
+//     every instance is then one and the same function, G(|x′|); only the layer differs. A
+//     learned initialisation (training.meta) or a shared network can carry what the instances
+//     share; in the box's own frame, a wave centred somewhere else each time, no single θ can.
 //
 //     The Gaussian is too narrow for uniform points to see, so a second loss term
 //     "pde_source" evaluates the same residual on points drawn from a normal distribution
