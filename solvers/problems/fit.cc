@@ -17,6 +17,7 @@
 //     seconds: [0.5, 2.5]             # audio: that part of the clip
 //     time_scale: 1                   # audio, video: t runs over [-s, s] instead of [-1, 1]
 //     scale_targets: band_limited     # a multiscale field's coarser scales: band_limited | signal
+//     draws: epochs                   # the batches' samples: epochs | independent
 //
 // Coordinates: the sample centres spread evenly over [-1, 1] on each axis, so that sample k
 // of n lies at -1 + (2k + 1)/n (the centre of its n-th of the interval): (x, y) for an image,
@@ -26,10 +27,15 @@
 // A hash grid (fields/hash_grid.h) over this box with N cells across an axis of N samples
 // has its vertices on the samples: p = N (u + 1)/2 + 1/2 = k + 1 at u = -1 + (2k + 1)/N.
 //
-// Training: one loss term `signal` (batch `interior`): random samples, drawn with
-// replacement (all of them, in order, when the batch is at least their count), and the
-// residual value − target per channel (a LinearResidual on the value stream), so the loss
-// is the mean squared error over the batch. Every optimizer and checkpoints work as for any
+// Training: one loss term `signal` (batch `interior`): random samples (all of them, in order,
+// when the batch is at least their count), and the residual value − target per channel (a
+// LinearResidual on the value stream), so the loss is the mean squared error over the batch.
+// With `draws: epochs` (the default) the samples are drawn in epochs: each batch takes the
+// next ones of a shuffled order of all of them, reshuffled when used up
+// (solvers/sampling/epoch_order.h, seeded by training.seed, indexed by the step, so a resumed
+// run draws the same); `independent` draws each with replacement. Epochs were ahead on every
+// shipped fit (docs/experiments.md, 2026-11-28 session 31). A family's pictures are fitted on
+// all their pixels and have no `draws`. Every optimizer and checkpoints work as for any
 // problem. The progress line adds the PSNR (audio: SNR) on at most 65,536 evenly spread
 // samples, refreshed every 10 s.
 //
@@ -59,6 +65,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <limits>
@@ -78,6 +85,7 @@
 #include "solvers/problems/image_family.h"
 #include "solvers/problems/periodic_lowpass.h"
 #include "solvers/problems/problems.h"
+#include "solvers/sampling/epoch_order.h"
 
 namespace nfield::solvers {
 namespace {
@@ -102,7 +110,11 @@ double snr_db(const Eigen::MatrixXd& fitted, const Eigen::MatrixXd& target) {
   return 10.0 * std::log10(target.squaredNorm() / std::max((fitted - target).squaredNorm(), 1e-300));
 }
 
-class Fit final : public Problem, public ReportsProgress, public HasInstances, public HasScaleTargets {
+class Fit final : public Problem,
+                  public ReportsProgress,
+                  public HasInstances,
+                  public HasScaleTargets,
+                  public SamplesWithSolution {
  public:
   explicit Fit(const ProblemContext& context) : domain_({-1.0}, {1.0}) {
     const io::ConfigNode equation = context.root.child("equation");
@@ -121,6 +133,11 @@ class Fit final : public Problem, public ReportsProgress, public HasInstances, p
         read_pictures(equation, path);
       scale_targets_ =
           equation.get_choice("scale_targets", {"band_limited", "signal"}, "band_limited") == "band_limited";
+      if (equation.get_choice("draws", {"epochs", "independent"}, "epochs") == "epochs") {
+        const io::ConfigNode training = context.root.child("training");
+        const auto seed = training.has("seed") ? training.get_nonnegative<std::int64_t>("seed") : 0;
+        epochs_.emplace(signal_.size(), static_cast<std::uint64_t>(seed));
+      }
     }
     equation.reject_unknown_keys();
     finish();
@@ -153,6 +170,7 @@ class Fit final : public Problem, public ReportsProgress, public HasInstances, p
     term.sample = [this](Random& rng, Eigen::Index n) {
       const Eigen::Index count = signal_.size();
       if (n >= count) return TermPoints(coordinates(Eigen::VectorXi::LinSpaced(count, 0, static_cast<int>(count - 1))));
+      if (epochs_ && step_ >= 0) return TermPoints(coordinates(epochs_->at(step_ * n, n)));
       Eigen::VectorXi index(n);
       for (Eigen::Index i = 0; i < n; ++i)
         index(i) = static_cast<int>(rng() % static_cast<Random::result_type>(count));
@@ -169,6 +187,10 @@ class Fit final : public Problem, public ReportsProgress, public HasInstances, p
     };
     return {term};
   }
+
+  // The step indexes the epochs' order. Until a trainer has said it (a draw outside training),
+  // samples are drawn independently.
+  void before_step(long step, const Solution&, Random&) override { step_ = step; }
 
   // Only kept: the targets are filtered at the first residual (scale_values), so that
   // `nfield eval` and a config's validation spend no FFTs on them.
@@ -575,6 +597,8 @@ class Fit final : public Problem, public ReportsProgress, public HasInstances, p
   mutable std::once_flag scale_values_once_;
   mutable std::vector<Eigen::MatrixXf> scale_values_;
   mutable std::optional<Eigen::MatrixXd> last_evaluation_;  // reported_error's, for write_outputs
+  std::optional<EpochOrder> epochs_;  // draws: epochs
+  long step_ = -1;
 };
 
 }  // namespace

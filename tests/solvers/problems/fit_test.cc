@@ -6,6 +6,7 @@
 // io::write_audio itself: tests/io/audio_test.cc), and bad inputs located at their keys.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -15,10 +16,13 @@
 #include <stdexcept>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "io/audio.h"
 #include "io/png_image.h"
+#include "solvers/core/problem_capabilities.h"
 #include "solvers/core/residual.h"
+#include "solvers/core/solution.h"
 #include "solvers/run/run.h"
 #include "tests/testing/config_errors.h"
 #include "tests/testing/scratch.h"
@@ -98,6 +102,79 @@ training: {batch: {interior: 100000}, stages: [{optimizer: adam, steps: 1}]}
   // Fewer: random pixels, each with its own target.
   const TermPoints some = terms[0].sample(rng, 5);
   EXPECT_EQ(some.x.rows(), 5);
+}
+
+// The pixel (r · width + c) that a drawn point of a width × height picture stands for.
+std::vector<int> drawn_pixels(const TermPoints& points, int width, int height) {
+  std::vector<int> pixels;
+  for (Eigen::Index i = 0; i < points.x.rows(); ++i) {
+    const long c = std::lround(((points.x(i, 0) + 1) * width - 1) / 2);
+    const long r = std::lround(((1 - points.x(i, 1)) * height - 1) / 2);
+    pixels.push_back(static_cast<int>(r * width + c));
+  }
+  return pixels;
+}
+
+// draws: epochs (the default): 12 pixels in batches of 5, each 12 consecutive draws a
+// permutation of all of them, a new order each epoch, the same draws for a step whatever came
+// before it (resume), another order for another training.seed; `independent` repeats pixels
+// within an epoch; outside training (no step said) the draws are independent.
+TEST(Fit, DrawsInEpochsTakeEveryPixelOncePerEpoch) {
+  const fs::path config = write_config("fit_epochs", R"yaml(
+problem: fit
+equation: {signal: image, path: frame.png}
+training: {seed: 3, batch: {interior: 5}, stages: [{optimizer: adam, steps: 1}]}
+)yaml");
+  io::write_png(config.parent_path() / "frame.png", test_picture(4, 3, 1));
+  const Solution solution;
+  const auto draws = [&](const std::vector<std::string>& sets, long first, long steps) {
+    const RunSetup setup = load_run(config, sets);
+    auto* sampling = capability<SamplesWithSolution>(*setup.problem);
+    EXPECT_NE(sampling, nullptr);
+    const LossTerm term = setup.problem->loss_terms().at(0);
+    Random rng(0);
+    std::vector<int> pixels;
+    for (long step = first; step < first + steps; ++step) {
+      sampling->before_step(step, solution, rng);
+      const std::vector<int> batch = drawn_pixels(term.sample(rng, 5), 4, 3);
+      pixels.insert(pixels.end(), batch.begin(), batch.end());
+    }
+    return pixels;
+  };
+  const std::vector<int> epochs = draws({}, 0, 12);  // 60 draws: five epochs
+  std::vector<std::vector<int>> orders;
+  for (size_t e = 0; e < 5; ++e) {
+    std::vector<int> order(epochs.begin() + 12 * e, epochs.begin() + 12 * (e + 1));
+    orders.push_back(order);
+    std::sort(order.begin(), order.end());
+    for (int k = 0; k < 12; ++k) EXPECT_EQ(order[k], k) << "epoch " << e;
+  }
+  EXPECT_NE(orders[0], orders[1]);
+  EXPECT_NE(orders[1], orders[2]);
+  const std::vector<int> resumed = draws({}, 7, 2);
+  EXPECT_EQ(resumed, std::vector<int>(epochs.begin() + 35, epochs.begin() + 45));
+  EXPECT_NE(draws({"training.seed=4"}, 0, 12), epochs);
+
+  const std::vector<int> independent = draws({"equation.draws=independent"}, 0, 12);
+  bool repeats = false;
+  for (size_t e = 0; e < 5; ++e) {
+    std::vector<int> order(independent.begin() + 12 * e, independent.begin() + 12 * (e + 1));
+    std::sort(order.begin(), order.end());
+    repeats = repeats || std::adjacent_find(order.begin(), order.end()) != order.end();
+  }
+  EXPECT_TRUE(repeats);
+  // No step said: the trainer's engine decides, so two engines draw differently.
+  const RunSetup setup = load_run(config, {});
+  const LossTerm term = setup.problem->loss_terms().at(0);
+  Random first(1), second(2);
+  EXPECT_NE(drawn_pixels(term.sample(first, 5), 4, 3), drawn_pixels(term.sample(second, 5), 4, 3));
+
+  const fs::path bad = write_config("fit_epochs_bad", R"yaml(
+problem: fit
+equation: {signal: image, path: frame.png, draws: sometimes}
+)yaml");
+  io::write_png(bad.parent_path() / "frame.png", test_picture(4, 3, 1));
+  expect_located_error(bad, {3, 51, "equation.draws", "epochs, independent"});
 }
 
 // The periodic projection onto the modes |m| ≤ k of n samples, written out as a matrix:

@@ -4,15 +4,18 @@
 // quasi-random points lie in the domain, cover faces and the initial slice, and integrate a
 // smooth function far better than random points; RAR finds a localized source; grad_norm
 // sets λ to max|∇L_pde| / mean|∇L_bc| at the parameters it saw; causal weights are
-// exp(−ε · cumulative slice loss); a run using all of them resumes bit for bit; bad values
-// are config errors at their key.
+// exp(−ε · cumulative slice loss); a run using all of them resumes bit for bit; an epoch
+// order's samples follow from their positions alone; bad values are config errors at their key.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <numeric>
+#include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "fields/field_io.h"
 #include "io/hdf5_file.h"
@@ -21,6 +24,7 @@
 #include "solvers/training/causal_weighting.h"
 #include "solvers/training/loss_balancing.h"
 #include "solvers/run/run.h"
+#include "solvers/sampling/epoch_order.h"
 #include "solvers/sampling/random.h"
 #include "solvers/training/trainer.h"
 #include "tests/testing/resume_check.h"
@@ -455,6 +459,23 @@ TEST(SamplingConfig, ResolvedConfigKeepsTheKeys) {
   EXPECT_EQ(defaults.find("causal"), std::string::npos);
   EXPECT_EQ(plain.training.strategy_options<AdaptiveOptions>(), nullptr);
   EXPECT_FALSE(plain.training.has_strategies());
+}
+
+// Positions past the first epoch, asked out of order, give what asking in order gives: the
+// order is a function of the position alone. (Fit's draws: tests/solvers/problems/fit_test.cc.)
+TEST(EpochOrder, APositionsSampleDoesNotDependOnWhatWasAskedBefore) {
+  const EpochOrder order(7, 11);
+  const Eigen::VectorXi in_order = order.at(0, 30);
+  const EpochOrder fresh(7, 11);
+  EXPECT_EQ(fresh.at(23, 5), in_order.segment(23, 5));
+  EXPECT_EQ(fresh.at(2, 4), in_order.segment(2, 4));
+  for (int e = 0; e < 4; ++e) {
+    std::vector<int> epoch(in_order.data() + 7 * e, in_order.data() + 7 * e + 7);
+    std::sort(epoch.begin(), epoch.end());
+    for (int k = 0; k < 7; ++k) EXPECT_EQ(epoch[static_cast<size_t>(k)], k) << "epoch " << e;
+  }
+  EXPECT_THROW(EpochOrder(0, 1), std::invalid_argument);
+  EXPECT_THROW(order.at(-1, 1), std::invalid_argument);
 }
 
 }  // namespace
