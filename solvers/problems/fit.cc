@@ -134,8 +134,9 @@ class Fit final : public Problem,
       scale_targets_ =
           equation.get_choice("scale_targets", {"band_limited", "signal"}, "band_limited") == "band_limited";
       if (equation.get_choice("draws", {"epochs", "independent"}, "epochs") == "epochs") {
-        const io::ConfigNode training = context.root.child("training");
-        const auto seed = training.has("seed") ? training.get_nonnegative<std::int64_t>("seed") : 0;
+        std::int64_t seed = 0;  // training.seed's default (solvers/training/training_options.h)
+        if (context.root.has("training") && context.root.child("training").has("seed"))
+          seed = context.root.child("training").get_nonnegative<std::int64_t>("seed");
         epochs_.emplace(signal_.size(), static_cast<std::uint64_t>(seed));
       }
     }
