@@ -9,7 +9,8 @@
 //   capability            implemented by        called by the driver
 //   MasksError            helmholtz (PML)       error metrics on the grid (grid_output.cc)
 //   TakesInputVariances   nerf                  setup, when the field's encoding reads variances
-//   SamplesWithSolution   nerf, autoint_nerf    before each draw of training points
+//   SamplesWithSolution   nerf, autoint_nerf,   before each draw of training points
+//                         fit (the step)
 //   KeepsState            autoint_nerf          every checkpoint, resume, `nfield render`
 //   ReportsProgress       nerf, autoint_nerf,   the progress line, at most every 10 s
 //                         fit
