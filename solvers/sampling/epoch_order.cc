@@ -22,11 +22,8 @@ Eigen::VectorXi EpochOrder::at(std::int64_t first, Eigen::Index count) const {
     if (epoch != epoch_) {
       order_.resize(static_cast<size_t>(samples_));
       std::iota(order_.begin(), order_.end(), 0);
-      // A splitmix64 step of (seed, epoch): neighbouring epochs get unrelated engines.
-      std::uint64_t z = seed_ + 0x9E3779B97F4A7C15ull * static_cast<std::uint64_t>(epoch + 1);
-      z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-      z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-      Random rng(z ^ (z >> 31));
+      // Neighbouring epochs get unrelated engines.
+      Random rng(mix(seed_ + 0x9E3779B97F4A7C15ull * static_cast<std::uint64_t>(epoch)));
       std::shuffle(order_.begin(), order_.end(), rng);
       epoch_ = epoch;
     }

@@ -13,14 +13,6 @@ namespace {
 constexpr int kPrimes[UnitSequence::kMaxDimension] = {2,  3,  5,  7,  11, 13, 17, 19,
                                                       23, 29, 31, 37, 41, 43, 47, 53};
 
-// SplitMix64 finalizer: spreads nearby seeds (term 0, 1, …; dimension 2, 3, …) apart.
-std::uint64_t mix(std::uint64_t z) {
-  z += 0x9E3779B97F4A7C15ull;
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  return z ^ (z >> 31);
-}
-
 double radical_inverse(std::uint64_t i, int base) {
   const double inverse = 1.0 / base;
   double f = inverse, result = 0;
@@ -29,6 +21,13 @@ double radical_inverse(std::uint64_t i, int base) {
 }
 
 }  // namespace
+
+std::uint64_t mix(std::uint64_t z) {
+  z += 0x9E3779B97F4A7C15ull;
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
 
 const std::vector<std::string>& sampler_names() {
   static const std::vector<std::string> names{"uniform", "sobol", "halton"};

@@ -76,6 +76,10 @@ class AttachSequence {
   UnitSequence* previous_;
 };
 
+// One SplitMix64 step: spreads nearby seeds (term 0, 1, …; dimension 2, 3, …; epoch 0, 1, …)
+// apart, for engines seeded from a seed and a counter.
+std::uint64_t mix(std::uint64_t z);
+
 // Uniform in [0, 1), from the raw engine (independent of the library's distributions).
 inline double uniform01(Random& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
 
